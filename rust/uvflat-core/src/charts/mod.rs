@@ -1,0 +1,450 @@
+//! Splitting selected faces into charts.
+//!
+//! Two selected faces belong to the same chart when they share an edge that is
+//! * not a seam,
+//! * used by exactly two selected faces (a non-manifold edge is a cut), and
+//! * traversed in opposite directions by them (an inconsistently oriented edge is a cut).
+//!
+//! Chart vertices are classes of corners: the corners of one mesh vertex that are connected
+//! through such edges around it. A vertex on a seam therefore becomes one chart vertex per
+//! side, a seam that ends inside a chart becomes a slit, and a "bow-tie" vertex shared by two
+//! fans becomes two chart vertices.
+
+mod triangulate;
+
+pub use triangulate::triangulate_polygon;
+
+use std::collections::{HashMap, HashSet};
+
+use crate::mesh::PolyMesh;
+use crate::unwrap::ChartKind;
+
+/// One chart: a connected, triangulated piece of the selection with its own vertices.
+#[derive(Debug, Clone)]
+pub struct Chart {
+    /// Input faces of the chart, ascending.
+    pub faces: Vec<u32>,
+    /// `(input corner, chart vertex)` for every corner of the chart's faces.
+    pub corner_vertex: Vec<(u32, u32)>,
+    /// Mesh vertex of every chart vertex.
+    pub mesh_vertex: Vec<u32>,
+    /// Position of every chart vertex.
+    pub positions: Vec<[f64; 3]>,
+    /// Triangles over chart vertices, oriented like the input faces.
+    pub triangles: Vec<[u32; 3]>,
+    /// Input face of every triangle.
+    pub triangle_face: Vec<u32>,
+    /// Boundary loops, each oriented with the chart on its left (counter-clockwise for the
+    /// outer loop of a well-oriented map).
+    pub boundary_loops: Vec<Vec<u32>>,
+    /// Genus from the Euler characteristic (0 when `defect` is set).
+    pub genus: usize,
+    /// Topological class.
+    pub kind: ChartKind,
+    /// Why the chart cannot be mapped at all (non-orientable, non-manifold vertex), if so.
+    pub defect: Option<String>,
+}
+
+impl Chart {
+    /// Average pinned UV per chart vertex that has a pinned corner.
+    pub fn vertex_pins(&self, pin_of_corner: &[Option<[f64; 2]>]) -> Vec<(u32, [f64; 2])> {
+        let mut acc: HashMap<u32, ([f64; 2], u32)> = HashMap::new();
+        for &(c, v) in &self.corner_vertex {
+            if let Some(p) = pin_of_corner[c as usize] {
+                let e = acc.entry(v).or_insert(([0.0, 0.0], 0));
+                e.0[0] += p[0];
+                e.0[1] += p[1];
+                e.1 += 1;
+            }
+        }
+        let mut out: Vec<(u32, [f64; 2])> =
+            acc.into_iter().map(|(v, (s, n))| (v, [s[0] / n as f64, s[1] / n as f64])).collect();
+        out.sort_by_key(|p| p.0);
+        out
+    }
+
+    /// Index of the longest boundary loop (3D length), the "outer" one.
+    pub fn outer_loop(&self) -> Option<usize> {
+        (0..self.boundary_loops.len()).max_by(|&a, &b| self.loop_length(a).total_cmp(&self.loop_length(b)))
+    }
+
+    /// 3D length of boundary loop `l`.
+    pub fn loop_length(&self, l: usize) -> f64 {
+        let lp = &self.boundary_loops[l];
+        (0..lp.len())
+            .map(|i| {
+                let a = self.positions[lp[i] as usize];
+                let b = self.positions[lp[(i + 1) % lp.len()] as usize];
+                crate::geometry::norm(crate::geometry::sub(b, a))
+            })
+            .sum()
+    }
+
+    /// Whether each chart vertex lies on a boundary loop.
+    pub fn boundary_mask(&self) -> Vec<bool> {
+        let mut m = vec![false; self.positions.len()];
+        for lp in &self.boundary_loops {
+            for &v in lp {
+                m[v as usize] = true;
+            }
+        }
+        m
+    }
+
+    /// Check the chart's invariants; used by tests. Panics with a message on violation.
+    pub fn sanity_check(&self) {
+        let n = self.positions.len() as u32;
+        assert_eq!(self.mesh_vertex.len(), self.positions.len());
+        assert_eq!(self.triangles.len(), self.triangle_face.len());
+        for t in &self.triangles {
+            assert!(t.iter().all(|&v| v < n), "triangle vertex out of range");
+            assert!(t[0] != t[1] && t[1] != t[2] && t[0] != t[2], "degenerate triangle {t:?}");
+        }
+        if self.defect.is_none() {
+            let mut directed = HashSet::new();
+            for t in &self.triangles {
+                for k in 0..3 {
+                    assert!(directed.insert((t[k], t[(k + 1) % 3])), "directed edge twice");
+                }
+            }
+            let mut seen = HashSet::new();
+            for lp in &self.boundary_loops {
+                assert!(lp.len() >= 2, "a boundary loop has at least two edges");
+                for i in 0..lp.len() {
+                    let (a, b) = (lp[i], lp[(i + 1) % lp.len()]);
+                    assert!(directed.contains(&(a, b)), "loop edge is not a triangle edge");
+                    assert!(seen.insert(a), "boundary loops share vertex {a}");
+                }
+            }
+
+        }
+    }
+}
+
+struct UnionFind(Vec<u32>);
+
+impl UnionFind {
+    fn new(n: usize) -> Self {
+        UnionFind((0..n as u32).collect())
+    }
+    fn find(&mut self, mut x: u32) -> u32 {
+        while self.0[x as usize] != x {
+            let p = self.0[x as usize];
+            self.0[x as usize] = self.0[p as usize];
+            x = p;
+        }
+        x
+    }
+    fn union(&mut self, a: u32, b: u32) {
+        let (ra, rb) = (self.find(a), self.find(b));
+        if ra != rb {
+            // Smaller index wins: keeps roots deterministic.
+            let (lo, hi) = if ra < rb { (ra, rb) } else { (rb, ra) };
+            self.0[hi as usize] = lo;
+        }
+    }
+}
+
+#[inline]
+fn edge_key(a: u32, b: u32) -> u64 {
+    let (lo, hi) = if a < b { (a, b) } else { (b, a) };
+    ((lo as u64) << 32) | hi as u64
+}
+
+/// Split the selected faces of `mesh` into charts (see the module docs for the rules).
+///
+/// Charts are numbered by their smallest face index. Never fails: problems of a single chart
+/// (non-orientable, non-manifold vertex) are recorded in [`Chart::defect`].
+pub fn build_charts(mesh: &PolyMesh<'_>, seams: &[[u32; 2]], selected: Option<&[bool]>) -> Vec<Chart> {
+    let n_faces = mesh.n_faces();
+    let n_corners = mesh.n_corners();
+    let is_sel = |f: usize| selected.is_none_or(|s| s[f]);
+    let seam_set: HashSet<u64> = seams.iter().map(|s| edge_key(s[0], s[1])).collect();
+
+    // Corner → face.
+    let mut corner_face = vec![0u32; n_corners];
+    for f in 0..n_faces {
+        for c in mesh.face_corners(f) {
+            corner_face[c] = f as u32;
+        }
+    }
+    // Edge records (key, corner starting the directed edge), selected faces only.
+    let mut recs: Vec<(u64, u32)> = Vec::with_capacity(n_corners);
+    for f in 0..n_faces {
+        if !is_sel(f) {
+            continue;
+        }
+        for c in mesh.face_corners(f) {
+            let cn = mesh.next_corner(f, c);
+            recs.push((edge_key(mesh.corner_vert(c), mesh.corner_vert(cn)), c as u32));
+        }
+    }
+    recs.sort_unstable();
+
+    // joined[c]: the polygon edge starting at corner c continues into another face of the chart.
+    let mut joined = vec![false; n_corners];
+    let mut face_uf = UnionFind::new(n_faces);
+    let mut corner_uf = UnionFind::new(n_corners);
+    let mut i = 0;
+    while i < recs.len() {
+        let mut j = i + 1;
+        while j < recs.len() && recs[j].0 == recs[i].0 {
+            j += 1;
+        }
+        if j - i == 2 && !seam_set.contains(&recs[i].0) {
+            let c1 = recs[i].1 as usize;
+            let c2 = recs[i + 1].1 as usize;
+            let (f1, f2) = (corner_face[c1] as usize, corner_face[c2] as usize);
+            let c1n = mesh.next_corner(f1, c1);
+            let c2n = mesh.next_corner(f2, c2);
+            // Opposite directions: c1 → c1n is c2n ← c2.
+            if f1 != f2 && mesh.corner_vert(c1) == mesh.corner_vert(c2n) {
+                face_uf.union(f1 as u32, f2 as u32);
+                joined[c1] = true;
+                joined[c2] = true;
+                corner_uf.union(c1 as u32, c2n as u32);
+                corner_uf.union(c1n as u32, c2 as u32);
+            }
+        }
+        i = j;
+    }
+
+    // Group faces into charts, numbered by smallest face.
+    let mut chart_of_root: HashMap<u32, usize> = HashMap::new();
+    let mut chart_faces: Vec<Vec<u32>> = Vec::new();
+    for f in 0..n_faces {
+        if !is_sel(f) {
+            continue;
+        }
+        let r = face_uf.find(f as u32);
+        let id = *chart_of_root.entry(r).or_insert_with(|| {
+            chart_faces.push(Vec::new());
+            chart_faces.len() - 1
+        });
+        chart_faces[id].push(f as u32);
+    }
+    let corner_root: Vec<u32> = (0..n_corners as u32).map(|c| corner_uf.find(c)).collect();
+
+    use rayon::prelude::*;
+    chart_faces.into_par_iter().map(|faces| make_chart(mesh, faces, &corner_root, &joined)).collect()
+}
+
+fn make_chart(mesh: &PolyMesh<'_>, faces: Vec<u32>, corner_root: &[u32], joined: &[bool]) -> Chart {
+    let positions_in = mesh.positions();
+    let mut local_of_root: HashMap<u32, u32> = HashMap::new();
+    let mut mesh_vertex = Vec::new();
+    let mut positions = Vec::new();
+    let mut corner_vertex = Vec::new();
+    let mut triangles = Vec::new();
+    let mut triangle_face = Vec::new();
+    // Boundary half-edges (chart vertex a → b): polygon edges not joined to another face.
+    let mut boundary_edges: Vec<(u32, u32)> = Vec::new();
+    let mut poly_pts: Vec<[f64; 3]> = Vec::new();
+    let mut poly_local: Vec<u32> = Vec::new();
+    for &f in &faces {
+        poly_pts.clear();
+        poly_local.clear();
+        for c in mesh.face_corners(f as usize) {
+            let v = mesh.corner_vert(c);
+            let id = *local_of_root.entry(corner_root[c]).or_insert_with(|| {
+                mesh_vertex.push(v);
+                positions.push(positions_in[v as usize]);
+                (mesh_vertex.len() - 1) as u32
+            });
+            corner_vertex.push((c as u32, id));
+            poly_pts.push(positions_in[v as usize]);
+            poly_local.push(id);
+        }
+        let start = mesh.face_corners(f as usize).start;
+        let m = poly_local.len();
+        for i in 0..m {
+            if !joined[start + i] {
+                boundary_edges.push((poly_local[i], poly_local[(i + 1) % m]));
+            }
+        }
+        for t in triangulate_polygon(&poly_pts) {
+            triangles.push([poly_local[t[0]], poly_local[t[1]], poly_local[t[2]]]);
+            triangle_face.push(f);
+        }
+    }
+
+    // A directed edge used twice means the chart is non-orientable (or folds onto itself).
+    let nv = positions.len();
+    let mut keys: Vec<u64> = triangles
+        .iter()
+        .flat_map(|t| (0..3).map(move |k| ((t[k] as u64) << 32) | t[(k + 1) % 3] as u64))
+        .collect();
+    keys.sort_unstable();
+    let mut defect = keys.windows(2).find(|w| w[0] == w[1]).map(|w| {
+        let (a, b) = ((w[0] >> 32) as usize, (w[0] & 0xffff_ffff) as usize);
+        format!(
+            "chart is non-orientable or folds onto itself at mesh edge {}-{}: add a seam there",
+            mesh_vertex[a], mesh_vertex[b]
+        )
+    });
+    drop(keys);
+    let mut out_boundary: Vec<u32> = vec![u32::MAX; nv];
+    let n_boundary = boundary_edges.len();
+    let n_interior_half = 3 * triangles.len() - n_boundary;
+    for &(a, b) in &boundary_edges {
+        if out_boundary[a as usize] != u32::MAX && defect.is_none() {
+            defect = Some(format!(
+                "mesh vertex {} is non-manifold inside the chart: add a seam through it",
+                mesh_vertex[a as usize]
+            ));
+        }
+        out_boundary[a as usize] = b;
+    }
+    let mut boundary_loops = Vec::new();
+    if defect.is_none() {
+        let mut visited = vec![false; nv];
+        for s in 0..nv {
+            if out_boundary[s] == u32::MAX || visited[s] {
+                continue;
+            }
+            let mut lp = Vec::new();
+            let mut v = s as u32;
+            while !visited[v as usize] {
+                visited[v as usize] = true;
+                lp.push(v);
+                v = out_boundary[v as usize];
+                if v == u32::MAX {
+                    break;
+                }
+            }
+            if v != s as u32 {
+                defect = Some(format!("boundary at mesh vertex {} does not close", mesh_vertex[s]));
+                break;
+            }
+            // Canonical start: the smallest mesh vertex (independent of face order).
+            let k = (0..lp.len()).min_by_key(|&i| (mesh_vertex[lp[i] as usize], lp[i])).unwrap();
+            lp.rotate_left(k);
+            boundary_loops.push(lp);
+        }
+    }
+    let n_edges = n_interior_half / 2 + n_boundary;
+    let chi = nv as i64 - n_edges as i64 + triangles.len() as i64;
+    let b = boundary_loops.len() as i64;
+    let two_g = 2 - chi - b;
+    let genus = if defect.is_none() && two_g > 0 { (two_g / 2) as usize } else { 0 };
+    let kind = if genus > 0 {
+        ChartKind::HigherGenus
+    } else if b == 0 {
+        ChartKind::Closed
+    } else if b == 1 {
+        ChartKind::Disk
+    } else {
+        ChartKind::DiskWithHoles
+    };
+    Chart {
+        faces,
+        corner_vertex,
+        mesh_vertex,
+        positions,
+        triangles,
+        triangle_face,
+        boundary_loops,
+        genus,
+        kind,
+        defect,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn grid(n: usize) -> (Vec<[f64; 3]>, Vec<u32>, Vec<u32>) {
+        let mut p = Vec::new();
+        for j in 0..=n {
+            for i in 0..=n {
+                p.push([i as f64, j as f64, 0.0]);
+            }
+        }
+        let mut cv = Vec::new();
+        let mut fs = Vec::new();
+        let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
+        for j in 0..n {
+            for i in 0..n {
+                cv.extend([id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)]);
+                fs.push(4);
+            }
+        }
+        (p, cv, fs)
+    }
+
+    #[test]
+    fn quad_grid_is_one_disk() {
+        let (p, cv, fs) = grid(4);
+        let m = PolyMesh::new(&p, &cv, &fs).unwrap();
+        let charts = build_charts(&m, &[], None);
+        assert_eq!(charts.len(), 1);
+        let c = &charts[0];
+        c.sanity_check();
+        assert_eq!(c.kind, ChartKind::Disk);
+        assert_eq!(c.positions.len(), 25);
+        assert_eq!(c.triangles.len(), 32);
+        assert_eq!(c.boundary_loops[0].len(), 16);
+    }
+
+    #[test]
+    fn seam_across_grid_splits_it_and_a_partial_seam_is_a_slit() {
+        let (p, cv, fs) = grid(4);
+        let m = PolyMesh::new(&p, &cv, &fs).unwrap();
+        // Full vertical cut at x = 2.
+        let full: Vec<[u32; 2]> = (0..4).map(|j| [(j * 5 + 2) as u32, ((j + 1) * 5 + 2) as u32]).collect();
+        let charts = build_charts(&m, &full, None);
+        assert_eq!(charts.len(), 2);
+        // Slit from the bottom edge to the middle: one chart, one loop, vertices duplicated.
+        let slit = &full[..2];
+        let charts = build_charts(&m, slit, None);
+        assert_eq!(charts.len(), 1);
+        charts[0].sanity_check();
+        assert_eq!(charts[0].kind, ChartKind::Disk);
+        assert_eq!(charts[0].positions.len(), 25 + 2);
+    }
+
+    #[test]
+    fn selection_border_splits_and_unselected_faces_are_ignored() {
+        let (p, cv, fs) = grid(3);
+        let m = PolyMesh::new(&p, &cv, &fs).unwrap();
+        let mut sel = vec![true; 9];
+        sel[4] = false; // centre face out: an annulus
+        let charts = build_charts(&m, &[], Some(&sel));
+        assert_eq!(charts.len(), 1);
+        charts[0].sanity_check();
+        assert_eq!(charts[0].kind, ChartKind::DiskWithHoles);
+        assert!(!charts[0].faces.contains(&4));
+    }
+
+    #[test]
+    fn closed_cube_is_closed_and_non_manifold_edges_are_cuts() {
+        let p = vec![
+            [0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0], [1.0, 0.0, 1.0], [1.0, 1.0, 1.0], [0.0, 1.0, 1.0],
+        ];
+        let cv: Vec<u32> = vec![0, 3, 2, 1, 4, 5, 6, 7, 0, 1, 5, 4, 1, 2, 6, 5, 2, 3, 7, 6, 3, 0, 4, 7];
+        let fs = vec![4u32; 6];
+        let m = PolyMesh::new(&p, &cv, &fs).unwrap();
+        let charts = build_charts(&m, &[], None);
+        assert_eq!(charts.len(), 1);
+        charts[0].sanity_check();
+        assert_eq!(charts[0].kind, ChartKind::Closed);
+        // A fin: a third face on edge 0-1 makes it non-manifold; the fin is its own chart.
+        let mut p2 = p.clone();
+        p2.push([0.5, -1.0, 0.0]);
+        let mut cv2 = cv.clone();
+        cv2.extend([0, 1, 8]);
+        let mut fs2 = fs.clone();
+        fs2.push(3);
+        let m2 = PolyMesh::new(&p2, &cv2, &fs2).unwrap();
+        let charts = build_charts(&m2, &[], None);
+        assert_eq!(charts.len(), 2, "the cube stays connected, the fin is alone");
+        for c in &charts {
+            c.sanity_check();
+        }
+        // Cutting one edge of a closed cube opens a two-edge slit: a disk.
+        assert_eq!(charts[0].kind, ChartKind::Disk);
+        assert_eq!(charts[0].boundary_loops[0].len(), 2);
+    }
+}

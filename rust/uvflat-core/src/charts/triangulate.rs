@@ -1,0 +1,140 @@
+//! n-gon triangulation by ear clipping in the polygon's own plane (concave polygons too).
+
+use crate::geometry::{cross, dot, norm};
+
+/// Triangulate a simple polygon given by its 3D corner positions, in order.
+///
+/// Returns triangles as triples of corner positions `0..n`, oriented like the polygon.
+/// The polygon is projected onto the plane of its Newell normal and ears are clipped,
+/// among the valid ears the one with the best
+/// (largest) minimum angle is cut, which keeps quads split along the better diagonal.
+/// Degenerate or self-intersecting input never fails: when no valid ear exists the rest is
+/// fanned, so the result always has exactly `n - 2` triangles covering every corner.
+pub fn triangulate_polygon(pts: &[[f64; 3]]) -> Vec<[usize; 3]> {
+    let n = pts.len();
+    if n < 3 {
+        return Vec::new();
+    }
+    if n == 3 {
+        return vec![[0, 1, 2]];
+    }
+    // Newell normal and a 2D basis of its plane.
+    let mut nrm = [0.0f64; 3];
+    for i in 0..n {
+        let (a, b) = (pts[i], pts[(i + 1) % n]);
+        nrm[0] += (a[1] - b[1]) * (a[2] + b[2]);
+        nrm[1] += (a[2] - b[2]) * (a[0] + b[0]);
+        nrm[2] += (a[0] - b[0]) * (a[1] + b[1]);
+    }
+    let ln = norm(nrm);
+    let p2: Vec<[f64; 2]> = if ln > 0.0 {
+        let z = [nrm[0] / ln, nrm[1] / ln, nrm[2] / ln];
+        let helper = if z[0].abs() < 0.9 { [1.0, 0.0, 0.0] } else { [0.0, 1.0, 0.0] };
+        let x = cross(helper, z);
+        let lx = norm(x);
+        let x = [x[0] / lx, x[1] / lx, x[2] / lx];
+        let y = cross(z, x);
+        pts.iter().map(|p| [dot(*p, x), dot(*p, y)]).collect()
+    } else {
+        return (1..n - 1).map(|i| [0, i, i + 1]).collect();
+    };
+
+    let mut idx: Vec<usize> = (0..n).collect();
+    let mut out = Vec::with_capacity(n - 2);
+    while idx.len() > 3 {
+        let m = idx.len();
+        let mut best: Option<(usize, f64)> = None;
+        for k in 0..m {
+            let (a, b, c) = (idx[(k + m - 1) % m], idx[k], idx[(k + 1) % m]);
+            let (pa, pb, pc) = (p2[a], p2[b], p2[c]);
+            let area2 = (pb[0] - pa[0]) * (pc[1] - pa[1]) - (pb[1] - pa[1]) * (pc[0] - pa[0]);
+            if area2 <= 0.0 {
+                continue; // reflex or degenerate corner
+            }
+            // No other remaining vertex inside the ear.
+            let inside = idx.iter().any(|&o| {
+                o != a && o != b && o != c && point_in_triangle(p2[o], pa, pb, pc)
+            });
+            if inside {
+                continue;
+            }
+            let q = min_angle_2d(pa, pb, pc);
+            // Strictly better by a relative margin: ties (rectangles) resolve the same way
+            // under rigid motions and round-off.
+            if best.is_none_or(|(_, bq)| q > bq * (1.0 + 1e-9) + 1e-300) {
+                best = Some((k, q));
+            }
+        }
+        let k = match best {
+            Some((k, _)) => k,
+            None => {
+                // No valid ear (degenerate / self-intersecting): fan the rest.
+                for i in 1..idx.len() - 1 {
+                    out.push([idx[0], idx[i], idx[i + 1]]);
+                }
+                return out;
+            }
+        };
+        let m = idx.len();
+        out.push([idx[(k + m - 1) % m], idx[k], idx[(k + 1) % m]]);
+        idx.remove(k);
+    }
+    out.push([idx[0], idx[1], idx[2]]);
+    out
+}
+
+fn point_in_triangle(p: [f64; 2], a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> bool {
+    let s = |u: [f64; 2], v: [f64; 2], w: [f64; 2]| (v[0] - u[0]) * (w[1] - u[1]) - (v[1] - u[1]) * (w[0] - u[0]);
+    let d1 = s(a, b, p);
+    let d2 = s(b, c, p);
+    let d3 = s(c, a, p);
+    d1 >= 0.0 && d2 >= 0.0 && d3 >= 0.0
+}
+
+fn min_angle_2d(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
+    let ang = |p: [f64; 2], q: [f64; 2], r: [f64; 2]| {
+        let u = [q[0] - p[0], q[1] - p[1], 0.0];
+        let v = [r[0] - p[0], r[1] - p[1], 0.0];
+        crate::geometry::angle_between(u, v)
+    };
+    ang(a, b, c).min(ang(b, c, a)).min(ang(c, a, b))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn area2(p: &[[f64; 3]], t: [usize; 3]) -> f64 {
+        let a = p[t[0]];
+        let b = p[t[1]];
+        let c = p[t[2]];
+        (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+    }
+
+    #[test]
+    fn concave_l_shape_is_covered_without_flips() {
+        let p = [
+            [0.0, 0.0, 0.0],
+            [2.0, 0.0, 0.0],
+            [2.0, 1.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [1.0, 2.0, 0.0],
+            [0.0, 2.0, 0.0],
+        ];
+        let t = triangulate_polygon(&p);
+        assert_eq!(t.len(), 4);
+        let total: f64 = t.iter().map(|&t| area2(&p, t)).sum();
+        assert!((total - 6.0).abs() < 1e-12, "twice the L area is 6, got {total}");
+        assert!(t.iter().all(|&t| area2(&p, t) > 0.0));
+    }
+
+    #[test]
+    fn kite_is_split_along_the_diagonal_with_the_larger_minimum_angle() {
+        // Diagonal 0-2 would give two slivers of angle ~0.05 rad; 1-3 gives a minimum of ~0.1.
+        let p = [[0.0, 0.0, 0.0], [1.0, -0.05, 0.0], [2.0, 0.0, 0.0], [1.0, 0.05, 0.0]];
+        let t = triangulate_polygon(&p);
+        assert_eq!(t.len(), 2);
+        assert!(t.iter().all(|&t| t.contains(&1) && t.contains(&3)), "{t:?}");
+        assert!(t.iter().all(|&t| area2(&p, t) > 0.0));
+    }
+}

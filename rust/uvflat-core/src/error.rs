@@ -1,0 +1,45 @@
+//! Typed errors. Every variant names the offending element so a user can find it.
+
+use thiserror::Error;
+
+/// Everything that can go wrong before or around an unwrap.
+///
+/// Per-chart solve failures are *not* errors: they are reported in
+/// [`crate::ChartReport`] with [`crate::ChartStatus::Failed`] and a reason, so one
+/// bad chart never loses the others.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum UvError {
+    /// An array has the wrong length or shape.
+    #[error("{what}: {detail}")]
+    Shape { what: &'static str, detail: String },
+    /// A face's corner refers to a vertex that does not exist.
+    #[error("face {face}, corner {corner}: vertex index {vertex} out of range (mesh has {n_vertices} vertices)")]
+    VertexIndex { face: usize, corner: usize, vertex: u64, n_vertices: usize },
+    /// A vertex position is NaN or infinite.
+    #[error("vertex {vertex}: non-finite coordinate {value}")]
+    NonFinitePosition { vertex: usize, value: f64 },
+    /// A face has fewer than three corners.
+    #[error("face {face}: has {size} corners, at least 3 are needed")]
+    FaceTooSmall { face: usize, size: u64 },
+    /// A face uses the same vertex twice.
+    #[error("face {face}: vertex {vertex} appears more than once")]
+    RepeatedVertex { face: usize, vertex: usize },
+    /// A seam refers to a vertex that does not exist.
+    #[error("seam {seam}: vertex index {vertex} out of range (mesh has {n_vertices} vertices)")]
+    SeamIndex { seam: usize, vertex: u64, n_vertices: usize },
+    /// A pin refers to a corner that does not exist.
+    #[error("pin {pin}: corner index {corner} out of range (mesh has {n_corners} corners)")]
+    PinIndex { pin: usize, corner: u64, n_corners: usize },
+    /// A pinned UV is NaN or infinite.
+    #[error("pin {pin} (corner {corner}): non-finite UV")]
+    NonFinitePin { pin: usize, corner: usize },
+    /// A UV coordinate handed to a metric or fit is NaN or infinite.
+    #[error("corner {corner}: non-finite UV")]
+    NonFiniteUv { corner: usize },
+    /// An option has a value outside its domain.
+    #[error("option {name}: {reason}")]
+    Option { name: &'static str, reason: String },
+}
+
+/// Result alias used throughout the crate.
+pub type Result<T> = std::result::Result<T, UvError>;

@@ -1,0 +1,28 @@
+//! # uvflat-core
+//!
+//! Pure-Rust UV parameterization: polygon soup in, per-corner UVs out.
+//!
+//! Data flow of one unwrap ([`unwrap`]):
+//! 1. [`mesh::PolyMesh`] validates the polygon soup (typed [`UvError`] naming the element).
+//! 2. [`charts`] splits the selected faces into charts along seams, non-manifold edges,
+//!    inconsistently oriented edges and the selection border, triangulates n-gons (ear
+//!    clipping), finds boundary loops and classifies each chart.
+//! 3. [`methods`] maps every chart (in parallel) with the chosen [`Method`].
+//! 4. [`metrics`] measures every chart independently of the solver (flips, boundary
+//!    self-overlap, distortion) and the result carries one [`ChartReport`] per chart.
+//!
+//! See `ARCHITECTURE.md` at the repository root for the module graph.
+
+pub mod charts;
+pub mod error;
+pub mod geometry;
+pub mod mesh;
+pub mod methods;
+pub mod metrics;
+pub mod solvers;
+mod unwrap;
+
+pub use error::{Result, UvError};
+pub use methods::{method_names, BoundaryShape, Method, OptionValue, SpectralOptions};
+pub use metrics::{Distortion, MeshMetrics};
+pub use unwrap::{unwrap, ChartKind, ChartReport, ChartStatus, Fit, MeshInput, UnwrapOptions, Unwrapped};

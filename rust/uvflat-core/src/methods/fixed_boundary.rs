@@ -1,0 +1,243 @@
+//! The shared machinery of the barycentric (fixed-boundary) methods: place the outer boundary
+//! on a convex shape by arc length, fill holes virtually, and solve Σ_j w_ij (x_i − x_j) = 0 at
+//! every other vertex with the quadratic-with-fixed-values solver.
+//!
+//! Holes (every boundary loop but the longest) are filled with a virtual fan: one extra vertex
+//! at the hole's 3D centroid joined to each hole vertex. The virtual vertex is solved like any
+//! interior vertex and dropped afterwards, so the chart stays a disk and Tutte/Floater's
+//! guarantee (positive weights + convex boundary ⇒ no flips) covers its real triangles.
+//!
+//! Pins: the chart is first solved without them; its boundary shape is then moved by the
+//! least-squares similarity onto the pins, and pinned vertices are fixed at their pinned UVs
+//! together with the boundary (the report notes this). Pins far from the similarity can flip
+//! triangles; the report counts them.
+
+use super::{chart_angles, ChartFailure, ChartSolution};
+use crate::charts::Chart;
+use crate::geometry::{norm, sub};
+use crate::methods::BoundaryShape;
+use crate::solvers::{FixedValueSolver, Symmetry};
+
+/// Edge weights of a barycentric method.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Weights {
+    /// w_ij = 1 (Tutte).
+    Uniform,
+    /// w_ij = ½ (cot α_ij + cot β_ij) (harmonic; can be negative).
+    Cotangent,
+    /// w_ij = (tan(γ/2) + tan(δ/2)) / |x_j − x_i| (Floater's mean value; positive, not symmetric).
+    MeanValue,
+}
+
+/// A chart extended by virtual hole fans.
+pub struct Extended {
+    /// Positions: chart vertices then one virtual vertex per hole.
+    pub positions: Vec<[f64; 3]>,
+    /// Triangles: chart triangles then the virtual fans.
+    pub triangles: Vec<[u32; 3]>,
+    /// The outer loop (longest boundary loop).
+    pub outer: Vec<u32>,
+}
+
+/// Extend a chart by filling every boundary loop but the longest with a virtual fan.
+pub fn fill_holes(chart: &Chart) -> Extended {
+    let outer_i = chart.outer_loop().expect("a disk chart has a boundary loop");
+    let mut positions = chart.positions.clone();
+    let mut triangles = chart.triangles.clone();
+    for (li, lp) in chart.boundary_loops.iter().enumerate() {
+        if li == outer_i {
+            continue;
+        }
+        let n = lp.len() as f64;
+        let mut c = [0.0; 3];
+        for &v in lp {
+            for d in 0..3 {
+                c[d] += chart.positions[v as usize][d] / n;
+            }
+        }
+        let cv = positions.len() as u32;
+        positions.push(c);
+        for i in 0..lp.len() {
+            let (a, b) = (lp[i], lp[(i + 1) % lp.len()]);
+            // The chart lies left of a → b, so the fill uses b → a.
+            triangles.push([b, a, cv]);
+        }
+    }
+    Extended { positions, triangles, outer: chart.boundary_loops[outer_i].clone() }
+}
+
+/// UV of every outer-loop vertex on the boundary shape, spaced by 3D arc length,
+/// counter-clockwise (the chart is left of the loop, so triangles come out positive).
+pub fn boundary_positions(positions: &[[f64; 3]], outer: &[u32], shape: BoundaryShape) -> Vec<[f64; 2]> {
+    let n = outer.len();
+    let mut s = Vec::with_capacity(n);
+    let mut acc = 0.0;
+    for i in 0..n {
+        s.push(acc);
+        acc += norm(sub(positions[outer[(i + 1) % n] as usize], positions[outer[i] as usize]));
+    }
+    let total = acc;
+    let t: Vec<f64> = if total > 0.0 {
+        s.iter().map(|x| x / total).collect()
+    } else {
+        (0..n).map(|i| i as f64 / n as f64).collect()
+    };
+    match shape {
+        BoundaryShape::Circle => t
+            .iter()
+            .map(|&x| {
+                let a = std::f64::consts::TAU * x;
+                [a.cos(), a.sin()]
+            })
+            .collect(),
+        BoundaryShape::Square if n >= 4 => {
+            // Snap the vertices nearest to the quarter parameters to the corners.
+            let mut corners = [0usize; 4];
+            for (k, c) in corners.iter_mut().enumerate() {
+                let target = k as f64 / 4.0;
+                *c = (0..n)
+                    .min_by(|&a, &b| (t[a] - target).abs().total_cmp(&(t[b] - target).abs()))
+                    .unwrap();
+            }
+            corners[0] = 0;
+            for k in 1..4 {
+                let lo = corners[k - 1] + 1;
+                let hi = n - (4 - k);
+                corners[k] = corners[k].clamp(lo, hi);
+            }
+            let corner_uv = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+            let mut out = vec![[0.0; 2]; n];
+            for k in 0..4 {
+                let (a, b) = (corners[k], if k == 3 { n } else { corners[k + 1] });
+                let ta = t[a];
+                let tb = if k == 3 { 1.0 } else { t[b] };
+                let (p, q) = (corner_uv[k], corner_uv[(k + 1) % 4]);
+                for i in a..b {
+                    let f = if tb > ta { (t[i] - ta) / (tb - ta) } else { (i - a) as f64 / (b - a) as f64 };
+                    out[i] = [p[0] + f * (q[0] - p[0]), p[1] + f * (q[1] - p[1])];
+                }
+            }
+            out
+        }
+        BoundaryShape::Square => boundary_positions(positions, outer, BoundaryShape::Circle),
+    }
+}
+
+/// Triplets of the weighted Laplacian `L` (rows: Σ_j w_ij (x_i − x_j)).
+pub fn laplacian_triplets(positions: &[[f64; 3]], triangles: &[[u32; 3]], weights: Weights) -> Vec<(u32, u32, f64)> {
+    let mut out = Vec::with_capacity(triangles.len() * 12);
+    let push_sym = |i: u32, j: u32, w: f64, out: &mut Vec<(u32, u32, f64)>| {
+        out.extend([(i, i, w), (j, j, w), (i, j, -w), (j, i, -w)]);
+    };
+    match weights {
+        Weights::Uniform => {
+            let mut edges: Vec<(u32, u32)> = triangles
+                .iter()
+                .flat_map(|t| (0..3).map(move |k| (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3]))))
+                .collect();
+            edges.sort_unstable();
+            edges.dedup();
+            for (i, j) in edges {
+                push_sym(i, j, 1.0, &mut out);
+            }
+        }
+        Weights::Cotangent => {
+            let angles = chart_angles(positions, triangles);
+            for (t, a) in triangles.iter().zip(&angles) {
+                for k in 0..3 {
+                    let (i, j) = (t[(k + 1) % 3], t[(k + 2) % 3]);
+                    push_sym(i, j, 0.5 / a[k].tan(), &mut out);
+                }
+            }
+        }
+        Weights::MeanValue => {
+            let angles = chart_angles(positions, triangles);
+            let mean_len = {
+                let (mut s, mut n) = (0.0, 0usize);
+                for t in triangles {
+                    for k in 0..3 {
+                        s += norm(sub(positions[t[(k + 1) % 3] as usize], positions[t[k] as usize]));
+                        n += 1;
+                    }
+                }
+                if n > 0 && s > 0.0 { s / n as f64 } else { 1.0 }
+            };
+            let floor = 1e-12 * mean_len;
+            for (t, a) in triangles.iter().zip(&angles) {
+                for k in 0..3 {
+                    let i = t[k];
+                    let th = (0.5 * a[k]).tan();
+                    for j in [t[(k + 1) % 3], t[(k + 2) % 3]] {
+                        let l = norm(sub(positions[j as usize], positions[i as usize])).max(floor);
+                        let w = th / l;
+                        out.push((i, i, w));
+                        out.push((i, j, -w));
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Solve a fixed-boundary method on a chart.
+pub fn solve(
+    chart: &Chart,
+    pins: &[(u32, [f64; 2])],
+    shape: BoundaryShape,
+    weights: Weights,
+) -> Result<ChartSolution, ChartFailure> {
+    let ext = fill_holes(chart);
+    let n = ext.positions.len();
+    let trip = laplacian_triplets(&ext.positions, &ext.triangles, weights);
+    let symmetry = if weights == Weights::MeanValue { Symmetry::General } else { Symmetry::Symmetric };
+    let bnd = boundary_positions(&ext.positions, &ext.outer, shape);
+    let solver = FixedValueSolver::new(n, &trip, &ext.outer, symmetry)?;
+    let cols = [bnd.iter().map(|p| p[0]).collect::<Vec<_>>(), bnd.iter().map(|p| p[1]).collect::<Vec<_>>()];
+    let x = solver.solve(&cols, &[])?;
+    let mut uv: Vec<[f64; 2]> = (0..chart.positions.len()).map(|i| [x[0][i], x[1][i]]).collect();
+    let mut sol = ChartSolution::direct(Vec::new());
+    if !pins.is_empty() {
+        // Move the whole solution (hence the boundary) onto the pins, then fix both.
+        let mut target = vec![[f64::NAN; 2]; uv.len()];
+        for &(v, p) in pins {
+            target[v as usize] = p;
+        }
+        let moved = if super::lscm::pins_span(pins) {
+            crate::metrics::fit_similarity_points(&mut uv, &target)
+        } else {
+            false
+        };
+        if !moved {
+            let (v, p) = pins[0];
+            let d = [p[0] - uv[v as usize][0], p[1] - uv[v as usize][1]];
+            for q in uv.iter_mut() {
+                *q = [q[0] + d[0], q[1] + d[1]];
+            }
+        }
+        let mut fixed: Vec<u32> = ext.outer.clone();
+        let mut vals: Vec<[f64; 2]> = ext.outer.iter().map(|&v| uv[v as usize]).collect();
+        for &(v, p) in pins {
+            if let Some(k) = fixed.iter().position(|&f| f == v) {
+                vals[k] = p;
+            } else {
+                fixed.push(v);
+                vals.push(p);
+            }
+        }
+        let solver = FixedValueSolver::new(n, &trip, &fixed, symmetry)?;
+        let cols = [vals.iter().map(|p| p[0]).collect::<Vec<_>>(), vals.iter().map(|p| p[1]).collect::<Vec<_>>()];
+        let x = solver.solve(&cols, &[])?;
+        uv = (0..chart.positions.len()).map(|i| [x[0][i], x[1][i]]).collect();
+        sol.note = Some(format!(
+            "{} pinned vertex(es) fixed; the boundary {} was moved onto them by a similarity",
+            pins.len(),
+            match shape {
+                BoundaryShape::Circle => "circle",
+                BoundaryShape::Square => "square",
+            }
+        ));
+    }
+    sol.uv = uv;
+    Ok(sol)
+}

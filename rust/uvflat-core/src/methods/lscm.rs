@@ -1,0 +1,185 @@
+//! Least squares conformal maps.
+//!
+//! Paper: B. Lévy, S. Petitjean, N. Ray, J. Maillot, "Least Squares Conformal Maps for
+//! Automatic Texture Atlas Generation", SIGGRAPH 2002. The energy equals that of Discrete
+//! Conformal Parameterization (Desbrun, Meyer, Alliez 2002): ½ Σ cot|∇|² − signed UV area.
+//!
+//! The energy of a triangle depends only on its angles: with the largest angle at corner 2,
+//! the map is conformal iff `w2 − w0 = q (w1 − w0)` with `q = (sin α1 / sin α2) e^{iα0}`, and
+//! the triangle's LSCM energy is `|w2 − w0 − q (w1 − w0)|² · sin α2 / (2 sin α0 sin α1)`.
+//! Assembling it from angles lets ABF drive the same solver with its solved angles, and makes
+//! degenerate 3D triangles harmless (their clamped angles describe a thin valid triangle).
+//!
+//! Preconditions: a chart that is a disk (possibly with holes). Pins: with two or more pinned
+//! vertices at distinct UVs, they are fixed exactly; with one, the automatic solution is
+//! translated onto it; with none, the two boundary vertices farthest apart along the chart's
+//! longest bounding-box axis are pinned (any similarity of the result is equally optimal).
+//!
+//! Failures: a singular system (chart of disconnected pieces or all-degenerate triangles).
+
+use super::{chart_angles, ChartFailure, ChartSolution};
+use crate::charts::Chart;
+use crate::solvers::{FixedValueSolver, Symmetry};
+
+/// Triplets of the LSCM quadratic form (twice the conformal energy E_D − A) over interleaved unknowns `[u0, v0, u1, v1, …]`
+/// (size `2n`), assembled per triangle from corner angles. Symmetric positive semidefinite by
+/// construction (a sum of squares); both triangles of the matrix are emitted.
+pub fn conformal_triplets(triangles: &[[u32; 3]], angles: &[[f64; 3]]) -> Vec<(u32, u32, f64)> {
+    let mut out = Vec::with_capacity(triangles.len() * 36);
+    for (t, a) in triangles.iter().zip(angles) {
+        // Rotate labels so the largest angle is at position 2.
+        let k = (0..3).max_by(|&i, &j| a[i].total_cmp(&a[j])).unwrap();
+        let r = (k + 1) % 3; // new label 0
+        let v = [t[r], t[(r + 1) % 3], t[(r + 2) % 3]];
+        let al = [a[r], a[(r + 1) % 3], a[(r + 2) % 3]];
+        let (s0, s1, s2) = (al[0].sin(), al[1].sin(), al[2].sin());
+        let ratio = s1 / s2;
+        let (qr, qi) = (ratio * al[0].cos(), ratio * al[0].sin());
+        let w = s2 / (2.0 * s0 * s1);
+        // Residual Σ c_k w_k with c0 = q − 1, c1 = −q, c2 = 1.
+        let c = [(qr - 1.0, qi), (-qr, -qi), (1.0, 0.0)];
+        for i in 0..3 {
+            for j in 0..3 {
+                let (ai, bi) = c[i];
+                let (aj, bj) = c[j];
+                let (ui, vi) = (2 * v[i], 2 * v[i] + 1);
+                let (uj, vj) = (2 * v[j], 2 * v[j] + 1);
+                // Rows: Re = Σ a u − b v, Im = Σ b u + a v.
+                out.push((ui, uj, w * (ai * aj + bi * bj)));
+                out.push((ui, vj, w * (-ai * bj + bi * aj)));
+                out.push((vi, uj, w * (-bi * aj + ai * bj)));
+                out.push((vi, vj, w * (bi * bj + ai * aj)));
+            }
+        }
+    }
+    out
+}
+
+/// Two vertices to pin when the user pinned none: the boundary vertices (all vertices for a
+/// chart without boundary) extremal along the longest axis of the chart's bounding box, with
+/// UVs `(0, 0)` and `(d, 0)`, `d` their 3D distance. Ties go to the smaller mesh vertex.
+pub fn auto_pins(chart: &Chart) -> [(u32, [f64; 2]); 2] {
+    let mut cand: Vec<u32> = chart.boundary_loops.iter().flatten().copied().collect();
+    if cand.len() < 2 {
+        cand = (0..chart.positions.len() as u32).collect();
+    }
+    let p = &chart.positions;
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for &v in &cand {
+        for d in 0..3 {
+            lo[d] = lo[d].min(p[v as usize][d]);
+            hi[d] = hi[d].max(p[v as usize][d]);
+        }
+    }
+    let axis = (0..3).max_by(|&a, &b| (hi[a] - lo[a]).total_cmp(&(hi[b] - lo[b]))).unwrap();
+    let key = |v: &u32| (p[*v as usize][axis], chart.mesh_vertex[*v as usize], *v);
+    let a = *cand.iter().min_by(|x, y| key(x).partial_cmp(&key(y)).unwrap()).unwrap();
+    let mut b = *cand.iter().max_by(|x, y| {
+        let (kx, ky) = (key(x), key(y));
+        kx.0.total_cmp(&ky.0).then(ky.1.cmp(&kx.1)).then(ky.2.cmp(&kx.2))
+    }).unwrap();
+    if b == a {
+        b = if a == cand[0] { cand[1] } else { cand[0] };
+    }
+    let d = crate::geometry::norm(crate::geometry::sub(p[b as usize], p[a as usize]));
+    let d = if d > 0.0 { d } else { 1.0 };
+    [(a, [0.0, 0.0]), (b, [d, 0.0])]
+}
+
+/// A factored LSCM system for one chart and one set of pinned vertices: solve again for new
+/// pin positions without refactoring (live unwrap while dragging pins).
+pub struct LscmSolver {
+    solver: FixedValueSolver,
+    pinned: Vec<u32>,
+    n: usize,
+}
+
+impl LscmSolver {
+    /// Assemble and factor the LSCM system of `triangles` (over `n` vertices) with the given
+    /// corner `angles` and `pinned` vertices (at least two, distinct).
+    pub fn new(n: usize, triangles: &[[u32; 3]], angles: &[[f64; 3]], pinned: &[u32]) -> Result<Self, ChartFailure> {
+        let trip = conformal_triplets(triangles, angles);
+        let fixed: Vec<u32> = pinned.iter().flat_map(|&v| [2 * v, 2 * v + 1]).collect();
+        let solver = FixedValueSolver::new(2 * n, &trip, &fixed, Symmetry::Symmetric)?;
+        Ok(LscmSolver { solver, pinned: pinned.to_vec(), n })
+    }
+
+    /// UVs for the pinned vertices at `pin_uvs` (same order as `pinned`).
+    pub fn solve(&self, pin_uvs: &[[f64; 2]]) -> Result<Vec<[f64; 2]>, ChartFailure> {
+        assert_eq!(pin_uvs.len(), self.pinned.len());
+        let vals: Vec<f64> = pin_uvs.iter().flat_map(|p| [p[0], p[1]]).collect();
+        let x = self.solver.solve(&[vals], &[])?;
+        Ok((0..self.n).map(|i| [x[0][2 * i], x[0][2 * i + 1]]).collect())
+    }
+}
+
+/// Whether pins span more than a point (two or more at distinct UVs).
+pub(crate) fn pins_span(pins: &[(u32, [f64; 2])]) -> bool {
+    pins.len() >= 2 && pins.iter().any(|p| p.1 != pins[0].1)
+}
+
+/// LSCM of a chart driven by given corner angles (3D angles for plain LSCM, solved angles for
+/// ABF). Pins as described in the module docs; the returned note says how they were used.
+pub fn solve_with_angles(
+    chart: &Chart,
+    angles: &[[f64; 3]],
+    pins: &[(u32, [f64; 2])],
+) -> Result<(Vec<[f64; 2]>, Option<String>), ChartFailure> {
+    let n = chart.positions.len();
+    if pins_span(pins) {
+        let pinned: Vec<u32> = pins.iter().map(|p| p.0).collect();
+        let uvs: Vec<[f64; 2]> = pins.iter().map(|p| p.1).collect();
+        let s = LscmSolver::new(n, &chart.triangles, angles, &pinned)?;
+        return Ok((s.solve(&uvs)?, None));
+    }
+    let auto = auto_pins(chart);
+    let s = LscmSolver::new(n, &chart.triangles, angles, &[auto[0].0, auto[1].0])?;
+    let mut uv = s.solve(&[auto[0].1, auto[1].1])?;
+    let mut note = None;
+    if let Some(&(v, target)) = pins.first() {
+        let d = [target[0] - uv[v as usize][0], target[1] - uv[v as usize][1]];
+        for p in uv.iter_mut() {
+            *p = [p[0] + d[0], p[1] + d[1]];
+        }
+        note = Some(if pins.len() == 1 {
+            "one pinned vertex: the chart was translated onto it".to_string()
+        } else {
+            "all pins share one UV: the chart was translated onto it".to_string()
+        });
+    }
+    Ok((uv, note))
+}
+
+/// LSCM with the chart's 3D angles.
+pub fn solve(chart: &Chart, pins: &[(u32, [f64; 2])]) -> Result<ChartSolution, ChartFailure> {
+    let angles = chart_angles(&chart.positions, &chart.triangles);
+    let (uv, note) = solve_with_angles(chart, &angles, pins)?;
+    let mut s = ChartSolution::direct(uv);
+    s.note = note;
+    Ok(s)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The angle form equals ½ Σ cot α |e_opp|² − A on an arbitrary triangle and map.
+    #[test]
+    fn angle_form_equals_cotangent_form() {
+        let p = [[0.1, 0.2, 0.0], [1.3, -0.1, 0.4], [0.4, 0.9, -0.3]];
+        let a = crate::geometry::raw_angles(p);
+        let w = [[0.3, 0.1], [1.1, 0.4], [0.2, 0.8]];
+        let trip = conformal_triplets(&[[0, 1, 2]], &[a]);
+        let x = [w[0][0], w[0][1], w[1][0], w[1][1], w[2][0], w[2][1]];
+        let e_form: f64 = trip.iter().map(|&(i, j, v)| x[i as usize] * v * x[j as usize]).sum();
+        // Dirichlet energy ½∫|∇u|² + |∇v|² = ¼ Σ cot α_k |e_k|²; the form is 2 (E_D − A).
+        let mut e_dirichlet = 0.0;
+        for k in 0..3 {
+            let (i, j) = ((k + 1) % 3, (k + 2) % 3);
+            let d = [w[j][0] - w[i][0], w[j][1] - w[i][1]];
+            e_dirichlet += 0.25 / a[k].tan() * (d[0] * d[0] + d[1] * d[1]);
+        }
+        let expected = 2.0 * (e_dirichlet - crate::geometry::signed_area_2d(w));
+        assert!((e_form - expected).abs() < 1e-12, "{e_form} vs {expected}");
+    }
+}

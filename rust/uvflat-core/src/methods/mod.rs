@@ -1,0 +1,242 @@
+//! Parameterization methods, one file each, and the [`Method`] enum that dispatches.
+//!
+//! Every method maps one [`Chart`] to per-chart-vertex UVs. Charts that no method can map
+//! (closed, higher genus, defects found while building the chart) fail here with a reason.
+
+pub mod fixed_boundary;
+pub mod harmonic;
+pub mod lscm;
+pub mod mean_value;
+pub mod spectral;
+pub mod tutte;
+
+use crate::charts::Chart;
+use crate::error::{Result, UvError};
+use crate::unwrap::ChartKind;
+
+/// Where a fixed-boundary method puts the outer boundary loop.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum BoundaryShape {
+    /// Unit circle, vertices spaced by 3D arc length. Default. Strictly convex, so the
+    /// barycentric methods with positive weights never flip.
+    #[default]
+    Circle,
+    /// Unit square, the four boundary vertices nearest the quarter arc lengths at its corners.
+    Square,
+}
+
+/// Options of the spectral conformal method.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SpectralOptions {
+    /// Most inverse-iteration steps. Default 200.
+    pub max_iterations: usize,
+    /// Stop when the Rayleigh quotient changes by less than this (relative). Default 1e-10.
+    pub tolerance: f64,
+}
+
+impl Default for SpectralOptions {
+    fn default() -> Self {
+        SpectralOptions { max_iterations: 200, tolerance: 1e-10 }
+    }
+}
+
+/// The parameterization method and its options.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub enum Method {
+    /// Tutte 1963: uniform weights, fixed boundary.
+    Tutte { boundary: BoundaryShape },
+    /// Eck et al. 1995: cotangent weights, fixed boundary.
+    Harmonic { boundary: BoundaryShape },
+    /// Floater 2003: mean value weights, fixed boundary.
+    MeanValue { boundary: BoundaryShape },
+    /// Lévy et al. 2002 / Desbrun et al. 2002: least squares conformal, free boundary. Default.
+    #[default]
+    Lscm,
+    /// Mullen et al. 2008: spectral conformal, free boundary, no pins.
+    Spectral(SpectralOptions),
+}
+
+/// A value of a method option as it arrives from Python, the add-on or a command line.
+#[derive(Debug, Clone, PartialEq)]
+pub enum OptionValue {
+    Bool(bool),
+    Int(i64),
+    Float(f64),
+    Str(String),
+}
+
+/// Names accepted by [`Method::parse`].
+pub fn method_names() -> &'static [&'static str] {
+    &["tutte", "harmonic", "mean_value", "lscm", "spectral"]
+}
+
+fn opt_err(name: &'static str, reason: impl Into<String>) -> UvError {
+    UvError::Option { name, reason: reason.into() }
+}
+
+fn as_float(name: &'static str, v: &OptionValue) -> Result<f64> {
+    match v {
+        OptionValue::Float(x) => Ok(*x),
+        OptionValue::Int(i) => Ok(*i as f64),
+        other => Err(opt_err(name, format!("expected a number, got {other:?}"))),
+    }
+}
+
+fn as_count(name: &'static str, v: &OptionValue) -> Result<usize> {
+    match v {
+        OptionValue::Int(i) if *i >= 1 => Ok(*i as usize),
+        other => Err(opt_err(name, format!("expected a positive integer, got {other:?}"))),
+    }
+}
+
+impl Method {
+    /// Build a method from its name and options.
+    ///
+    /// Errors: [`UvError::Option`] for an unknown method, an option the method does not take,
+    /// or a value of the wrong type or out of range.
+    pub fn parse(name: &str, options: &[(String, OptionValue)]) -> Result<Method> {
+        let mut boundary = BoundaryShape::Circle;
+        let mut spectral = SpectralOptions::default();
+        let fixed = matches!(name, "tutte" | "harmonic" | "mean_value");
+        for (key, value) in options {
+            match (key.as_str(), name) {
+                ("boundary", _) if fixed => {
+                    boundary = match value {
+                        OptionValue::Str(s) if s == "circle" => BoundaryShape::Circle,
+                        OptionValue::Str(s) if s == "square" => BoundaryShape::Square,
+                        other => return Err(opt_err("boundary", format!("expected \"circle\" or \"square\", got {other:?}"))),
+                    }
+                }
+                ("max_iterations", "spectral") => spectral.max_iterations = as_count("max_iterations", value)?,
+                ("tolerance", "spectral") => spectral.tolerance = as_float("tolerance", value)?,
+                _ => {
+                    if !method_names().contains(&name) {
+                        break;
+                    }
+                    return Err(UvError::Option {
+                        name: "options",
+                        reason: format!("method {name:?} has no option {key:?}"),
+                    });
+                }
+            }
+        }
+        let m = match name {
+            "tutte" => Method::Tutte { boundary },
+            "harmonic" => Method::Harmonic { boundary },
+            "mean_value" => Method::MeanValue { boundary },
+            "lscm" => Method::Lscm,
+            "spectral" => Method::Spectral(spectral),
+            other => {
+                return Err(opt_err("method", format!("unknown method {other:?}; expected one of {:?}", method_names())))
+            }
+        };
+        m.validate()?;
+        Ok(m)
+    }
+
+    /// Stable name of the method.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Method::Tutte { .. } => "tutte",
+            Method::Harmonic { .. } => "harmonic",
+            Method::MeanValue { .. } => "mean_value",
+            Method::Lscm => "lscm",
+            Method::Spectral(_) => "spectral",
+        }
+    }
+
+    /// Check option values (also done by [`Method::parse`]).
+    pub fn validate(&self) -> Result<()> {
+        if let Method::Spectral(o) = self {
+            if !(o.tolerance > 0.0 && o.tolerance.is_finite()) {
+                return Err(opt_err("tolerance", format!("must be a positive number, got {}", o.tolerance)));
+            }
+            if o.max_iterations == 0 {
+                return Err(opt_err("max_iterations", "must be at least 1"));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A chart could not be mapped; the string says why, in words a user can act on.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ChartFailure(pub String);
+
+/// The method that actually produced a chart's UVs when it is not the requested one.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Fallback {
+    /// Name of the method used.
+    pub method: &'static str,
+    /// Why the requested method was not used.
+    pub reason: String,
+}
+
+/// UVs of one chart (per chart vertex) and how they were obtained.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ChartSolution {
+    /// UV per chart vertex.
+    pub uv: Vec<[f64; 2]>,
+    /// Iterations of an iterative method (0 for direct solves).
+    pub iterations: usize,
+    /// Final residual of an iterative method (0 for direct solves).
+    pub residual: f64,
+    /// A remark for the report (for example how pins were honoured).
+    pub note: Option<String>,
+    /// Set when another method produced the UVs.
+    pub fallback: Option<Fallback>,
+}
+
+impl ChartSolution {
+    pub(crate) fn direct(uv: Vec<[f64; 2]>) -> Self {
+        ChartSolution { uv, iterations: 0, residual: 0.0, note: None, fallback: None }
+    }
+}
+
+impl From<crate::solvers::SolveError> for ChartFailure {
+    fn from(e: crate::solvers::SolveError) -> Self {
+        ChartFailure(e.to_string())
+    }
+}
+
+/// Corner angles of every chart triangle, clamped to valid triangles (see
+/// [`crate::geometry::clamped_angles`]).
+pub fn chart_angles(positions: &[[f64; 3]], triangles: &[[u32; 3]]) -> Vec<[f64; 3]> {
+    triangles
+        .iter()
+        .map(|t| crate::geometry::clamped_angles([positions[t[0] as usize], positions[t[1] as usize], positions[t[2] as usize]]))
+        .collect()
+}
+
+/// Check that a chart can be mapped by a method that needs a disk (with or without holes).
+pub fn require_disk(chart: &Chart) -> std::result::Result<(), ChartFailure> {
+    if let Some(d) = &chart.defect {
+        return Err(ChartFailure(d.clone()));
+    }
+    match chart.kind {
+        ChartKind::Disk | ChartKind::DiskWithHoles => Ok(()),
+        ChartKind::Closed => Err(ChartFailure(
+            "closed surface without boundary: mark at least one seam to open it (automatic cutting is not available yet)".into(),
+        )),
+        ChartKind::HigherGenus => Err(ChartFailure(format!(
+            "surface of genus {}: mark seams that cut through every handle (automatic cutting is not available yet)",
+            chart.genus
+        ))),
+    }
+}
+
+/// Map one chart with `method`, honouring `pins` (chart vertex, UV) as the method allows.
+pub fn solve(method: &Method, chart: &Chart, pins: &[(u32, [f64; 2])]) -> std::result::Result<ChartSolution, ChartFailure> {
+    require_disk(chart)?;
+    let sol = match method {
+        Method::Tutte { boundary } => tutte::solve(chart, pins, *boundary),
+        Method::Harmonic { boundary } => harmonic::solve(chart, pins, *boundary),
+        Method::MeanValue { boundary } => mean_value::solve(chart, pins, *boundary),
+        Method::Lscm => lscm::solve(chart, pins),
+        Method::Spectral(o) => spectral::solve(chart, pins, o),
+    }?;
+    if let Some(i) = sol.uv.iter().position(|p| !p[0].is_finite() || !p[1].is_finite()) {
+        return Err(ChartFailure(format!("the solve produced a non-finite UV at mesh vertex {}", chart.mesh_vertex[i])));
+    }
+    Ok(sol)
+}

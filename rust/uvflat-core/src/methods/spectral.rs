@@ -1,0 +1,154 @@
+//! Spectral conformal parameterization.
+//!
+//! Paper: P. Mullen, Y. Tong, P. Alliez, M. Desbrun, "Spectral Conformal Parameterization",
+//! SGP 2008. Minimise the LSCM energy `xᵀ Q x` subject to `xᵀ B x = 1` and `x` B-orthogonal
+//! to the constant maps, with `B` the boundary mass (half the incident boundary edge lengths
+//! at each boundary vertex): the Fiedler vector of `Q x = λ B x`. No pins are needed, so the
+//! boundary is free of the arbitrary choice LSCM makes.
+//!
+//! Solved by inverse iteration on one sparse Cholesky factorization of `Q + εB` (ε small and
+//! relative to Q's diagonal): the shifted pencil has exactly the same eigenvectors, and B-
+//! orthogonality to the constants is preserved by the iteration. Converged when the Rayleigh quotient changes by less than
+//! `tolerance` (relative, with an absolute floor for developable charts whose λ is 0).
+//!
+//! Preconditions: a disk chart (holes allowed: all loops count as boundary). Pins: two or
+//! more pinned vertices at distinct UVs make the chart an LSCM solve with those pins (the
+//! report says so); one pin translates the result onto it. Failures: the factorization fails
+//! even with a larger shift, or the iteration produces non-finite values.
+
+use super::{chart_angles, lscm, ChartFailure, ChartSolution, SpectralOptions};
+use crate::charts::Chart;
+use crate::geometry::{norm, sub};
+use crate::solvers::{FixedValueSolver, Symmetry};
+
+fn quad(trip: &[(u32, u32, f64)], x: &[f64]) -> Vec<f64> {
+    let mut y = vec![0.0; x.len()];
+    for &(i, j, v) in trip {
+        y[i as usize] += v * x[j as usize];
+    }
+    y
+}
+
+/// Map one chart.
+pub fn solve(chart: &Chart, pins: &[(u32, [f64; 2])], options: &SpectralOptions) -> Result<ChartSolution, ChartFailure> {
+    let angles = chart_angles(&chart.positions, &chart.triangles);
+    if lscm::pins_span(pins) {
+        let (uv, _) = lscm::solve_with_angles(chart, &angles, pins)?;
+        let mut s = ChartSolution::direct(uv);
+        s.note = Some("pinned chart: solved as LSCM with the pins (spectral takes no pins)".into());
+        return Ok(s);
+    }
+    let n = chart.positions.len();
+    let m = 2 * n;
+    let q = lscm::conformal_triplets(&chart.triangles, &angles);
+    // Boundary mass.
+    let mut b = vec![0.0; m];
+    for lp in &chart.boundary_loops {
+        for i in 0..lp.len() {
+            let (a, c) = (lp[i] as usize, lp[(i + 1) % lp.len()] as usize);
+            let l = 0.5 * norm(sub(chart.positions[c], chart.positions[a]));
+            for k in [a, c] {
+                b[2 * k] += l;
+                b[2 * k + 1] += l;
+            }
+        }
+    }
+    let bsum: f64 = b.iter().sum();
+    if !(bsum > 0.0) {
+        return Err(ChartFailure("spectral: the chart's boundary has zero length".into()));
+    }
+    let mut diag = vec![0.0; m];
+    for &(i, j, v) in &q {
+        if i == j {
+            diag[i as usize] += v;
+        }
+    }
+    let mean_diag = diag.iter().sum::<f64>() / m as f64;
+    // Shift by a multiple of B: (Q + εB) x = μ B x has exactly the eigenvectors of Q x = λ B x
+    // (μ = λ + ε) and is positive definite, since no conformal map vanishes on the boundary.
+    let mean_b = bsum / m as f64;
+    let mut factor = None;
+    for rel in [1e-8, 1e-6, 1e-4] {
+        let eps = rel * mean_diag.max(f64::MIN_POSITIVE) / mean_b;
+        let mut k = q.clone();
+        k.extend((0..m as u32).filter(|&i| b[i as usize] > 0.0).map(|i| (i, i, eps * b[i as usize])));
+        if let Ok(f) = FixedValueSolver::new(m, &k, &[], Symmetry::Symmetric) {
+            factor = Some(f);
+            break;
+        }
+    }
+    let factor = factor.ok_or_else(|| ChartFailure("spectral: the conformal energy matrix could not be factored".into()))?;
+
+    // B-orthogonal projection away from the constant maps, then B-normalisation.
+    let project = |x: &mut [f64]| {
+        for c in 0..2 {
+            let (mut s, mut w) = (0.0, 0.0);
+            for i in 0..n {
+                s += b[2 * i + c] * x[2 * i + c];
+                w += b[2 * i + c];
+            }
+            let mean = s / w;
+            for i in 0..n {
+                x[2 * i + c] -= mean;
+            }
+        }
+        let nb: f64 = x.iter().zip(&b).map(|(a, w)| a * a * w).sum::<f64>().sqrt();
+        if nb > 0.0 {
+            for a in x.iter_mut() {
+                *a /= nb;
+            }
+        }
+        nb
+    };
+    // Start from the chart's projection onto the plane of its two longest bounding-box axes.
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for p in &chart.positions {
+        for d in 0..3 {
+            lo[d] = lo[d].min(p[d]);
+            hi[d] = hi[d].max(p[d]);
+        }
+    }
+    let mut axes = [0usize, 1, 2];
+    axes.sort_by(|&a, &c| (hi[c] - lo[c]).total_cmp(&(hi[a] - lo[a])));
+    let mut x: Vec<f64> = chart.positions.iter().flat_map(|p| [p[axes[0]], p[axes[1]]]).collect();
+    project(&mut x);
+    let floor = 1e-12 * mean_diag * m as f64 / bsum;
+    let mut lambda = f64::INFINITY;
+    let mut iterations = 0;
+    let mut change = f64::INFINITY;
+    for it in 0..options.max_iterations {
+        iterations = it + 1;
+        let rhs: Vec<f64> = x.iter().zip(&b).map(|(a, w)| a * w).collect();
+        let y = factor.solve(&[vec![]], &[rhs])?;
+        x = y.into_iter().next().unwrap();
+        if !(project(&mut x) > 0.0) {
+            return Err(ChartFailure("spectral: inverse iteration collapsed".into()));
+        }
+        let qx = quad(&q, &x);
+        let l: f64 = x.iter().zip(&qx).map(|(a, c)| a * c).sum();
+        change = (l - lambda).abs() / l.abs().max(floor);
+        lambda = l;
+        if change <= options.tolerance {
+            break;
+        }
+    }
+    let mut uv: Vec<[f64; 2]> = (0..n).map(|i| [x[2 * i], x[2 * i + 1]]).collect();
+    let mut note = None;
+    if let Some(&(v, p)) = pins.first() {
+        let d = [p[0] - uv[v as usize][0], p[1] - uv[v as usize][1]];
+        for u in uv.iter_mut() {
+            *u = [u[0] + d[0], u[1] + d[1]];
+        }
+        note = Some("one pinned vertex: the chart was translated onto it".into());
+    }
+    let mut s = ChartSolution::direct(uv);
+    s.iterations = iterations;
+    s.residual = change;
+    s.note = note;
+    if change > options.tolerance {
+        s.note = Some(format!(
+            "spectral: not converged after {iterations} iterations (relative eigenvalue change {change:.1e})"
+        ));
+    }
+    Ok(s)
+}

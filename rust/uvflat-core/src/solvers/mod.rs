@@ -1,0 +1,24 @@
+//! Shared solver pieces: the quadratic-with-fixed-values solver behind every linear method
+//! (and the global steps of the iterative ones).
+
+mod quadratic;
+
+pub use quadratic::{FixedValueSolver, Symmetry};
+
+/// Why a linear solve failed. Turned into a chart failure reason by the methods.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SolveError {
+    /// Cholesky met a non-positive pivot: the system is singular (for example a chart whose
+    /// free vertices are not connected to any fixed value).
+    #[error("the linear system is not positive definite (disconnected or degenerate chart)")]
+    NotPositiveDefinite,
+    /// LU found the matrix singular.
+    #[error("the linear system is singular")]
+    Singular,
+    /// The solution contains NaN or infinity.
+    #[error("the solve produced non-finite values")]
+    NonFinite,
+    /// Allocation or another non-numerical failure inside the sparse solver.
+    #[error("sparse solver failure: {0}")]
+    Other(String),
+}

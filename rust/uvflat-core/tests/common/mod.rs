@@ -1,0 +1,157 @@
+//! Test helpers: tiny OFF/OBJ readers, the shared mesh folder, analytic meshes.
+#![allow(dead_code)]
+
+use std::path::PathBuf;
+
+pub struct Soup {
+    pub positions: Vec<[f64; 3]>,
+    pub corner_verts: Vec<u32>,
+    pub face_sizes: Vec<u32>,
+}
+
+impl Soup {
+    pub fn input(&self) -> uvflat_core::MeshInput<'_> {
+        uvflat_core::MeshInput {
+            positions: &self.positions,
+            corner_verts: &self.corner_verts,
+            face_sizes: &self.face_sizes,
+            seams: &[],
+            selected: None,
+            pins: &[],
+        }
+    }
+}
+
+/// `<repo>/../shared/meshes`, or None (tests print why they skip).
+pub fn shared_meshes() -> Option<PathBuf> {
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/meshes");
+    if p.is_dir() {
+        Some(p)
+    } else {
+        eprintln!("SKIP: ../shared/meshes not found beside the repository; shared-mesh checks skipped");
+        None
+    }
+}
+
+pub fn load(path: &std::path::Path) -> Soup {
+    let text = std::fs::read_to_string(path).unwrap();
+    let ext = path.extension().unwrap().to_str().unwrap();
+    let mut s = Soup { positions: vec![], corner_verts: vec![], face_sizes: vec![] };
+    if ext == "off" {
+        let mut toks = text
+            .lines()
+            .map(|l| l.split('#').next().unwrap())
+            .flat_map(|l| l.split_whitespace())
+            .map(str::to_string);
+        let head = toks.next().unwrap();
+        assert!(head.ends_with("OFF"));
+        let nv: usize = toks.next().unwrap().parse().unwrap();
+        let nf: usize = toks.next().unwrap().parse().unwrap();
+        let _ne: usize = toks.next().unwrap().parse().unwrap();
+        for _ in 0..nv {
+            let p: Vec<f64> = (0..3).map(|_| toks.next().unwrap().parse().unwrap()).collect();
+            s.positions.push([p[0], p[1], p[2]]);
+        }
+        for _ in 0..nf {
+            let k: usize = toks.next().unwrap().parse().unwrap();
+            for _ in 0..k {
+                s.corner_verts.push(toks.next().unwrap().parse().unwrap());
+            }
+            s.face_sizes.push(k as u32);
+        }
+    } else {
+        for line in text.lines() {
+            let mut it = line.split_whitespace();
+            match it.next() {
+                Some("v") => {
+                    let p: Vec<f64> = it.take(3).map(|x| x.parse().unwrap()).collect();
+                    s.positions.push([p[0], p[1], p[2]]);
+                }
+                Some("f") => {
+                    let mut k = 0;
+                    for tok in it {
+                        let i: i64 = tok.split('/').next().unwrap().parse().unwrap();
+                        let i = if i < 0 { s.positions.len() as i64 + i } else { i - 1 };
+                        s.corner_verts.push(i as u32);
+                        k += 1;
+                    }
+                    s.face_sizes.push(k);
+                }
+                _ => {}
+            }
+        }
+    }
+    s
+}
+
+/// A planar disk: concentric rings of vertices (irregular triangles), z = 0.
+pub fn planar_disk(rings: usize, per_ring: usize) -> Soup {
+    let mut positions = vec![[0.0, 0.0, 0.0]];
+    for r in 1..=rings {
+        let n = per_ring * r;
+        for k in 0..n {
+            let a = std::f64::consts::TAU * (k as f64 + 0.3 * (r % 2) as f64) / n as f64;
+            let rad = r as f64 * (1.0 + 0.1 * (3.0 * a).sin());
+            positions.push([rad * a.cos(), 0.7 * rad * a.sin(), 0.0]);
+        }
+    }
+    // Triangulate ring r-1 to ring r by walking both rings.
+    let mut corner_verts = Vec::new();
+    let start = |r: usize| if r == 0 { 0 } else { 1 + per_ring * r * (r - 1) / 2 };
+    let count = |r: usize| if r == 0 { 1 } else { per_ring * r };
+    for r in 1..=rings {
+        let (s0, n0, s1, n1) = (start(r - 1), count(r - 1), start(r), count(r));
+        let (mut i, mut j) = (0usize, 0usize);
+        let ang = |s: usize, n: usize, k: usize, pos: &Vec<[f64; 3]>| {
+            let p = pos[s + k % n];
+            let a = p[1].atan2(p[0]);
+            let base = std::f64::consts::TAU * (k / n) as f64;
+            (if a < 0.0 { a + std::f64::consts::TAU } else { a }) + base
+        };
+        while i < n0 || j < n1 {
+            let advance_outer = if n0 == 1 {
+                true
+            } else if i >= n0 {
+                true
+            } else if j >= n1 {
+                false
+            } else {
+                ang(s1, n1, j + 1, &positions) < ang(s0, n0, i + 1, &positions)
+            };
+            if advance_outer {
+                corner_verts.extend([(s0 + i % n0) as u32, (s1 + j % n1) as u32, (s1 + (j + 1) % n1) as u32]);
+                j += 1;
+                if n0 == 1 && j >= n1 {
+                    break;
+                }
+            } else {
+                corner_verts.extend([(s0 + i % n0) as u32, (s1 + j % n1) as u32, (s0 + (i + 1) % n0) as u32]);
+                i += 1;
+            }
+        }
+    }
+    let face_sizes = vec![3u32; corner_verts.len() / 3];
+    Soup { positions, corner_verts, face_sizes }
+}
+
+/// An open cylinder of radius 1 and height h, cut open along one generator (seam) — as a
+/// grid of quads whose first and last columns share vertices, plus the seam edges.
+pub fn cut_cylinder(nu: usize, nv: usize, h: f64) -> (Soup, Vec<[u32; 2]>) {
+    let mut positions = Vec::new();
+    for j in 0..=nv {
+        for i in 0..nu {
+            let a = std::f64::consts::TAU * i as f64 / nu as f64;
+            positions.push([a.cos(), a.sin(), h * j as f64 / nv as f64]);
+        }
+    }
+    let id = |i: usize, j: usize| (j * nu + i % nu) as u32;
+    let mut corner_verts = Vec::new();
+    for j in 0..nv {
+        for i in 0..nu {
+            corner_verts.extend([id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)]);
+        }
+    }
+    let face_sizes = vec![4u32; nu * nv];
+    let seams = (0..nv).map(|j| [id(0, j), id(0, j + 1)]).collect();
+    (Soup { positions, corner_verts, face_sizes }, seams)
+}

@@ -1,0 +1,195 @@
+//! Analytic and property tests of every method through the public `unwrap` API.
+
+mod common;
+
+use common::*;
+use uvflat_core::{metrics, unwrap, BoundaryShape, ChartKind, ChartStatus, Method, SpectralOptions, UnwrapOptions};
+
+fn opts(method: Method) -> UnwrapOptions {
+    UnwrapOptions { method, ..Default::default() }
+}
+
+fn all_methods() -> Vec<Method> {
+    vec![
+        Method::Tutte { boundary: BoundaryShape::Circle },
+        Method::Tutte { boundary: BoundaryShape::Square },
+        Method::Harmonic { boundary: BoundaryShape::Circle },
+        Method::MeanValue { boundary: BoundaryShape::Circle },
+        Method::Lscm,
+        Method::Spectral(SpectralOptions::default()),
+    ]
+}
+
+#[test]
+fn planar_disk_conformal_methods_are_exact_similarities() {
+    let s = planar_disk(8, 7);
+    for m in [Method::Lscm, Method::Spectral(SpectralOptions::default())] {
+        let r = unwrap(&s.input(), &opts(m.clone())).unwrap();
+        assert_eq!(r.charts.len(), 1);
+        let c = &r.charts[0];
+        assert_eq!(c.status, ChartStatus::Solved, "{m:?}: {:?}", c.reason);
+        assert_eq!(c.kind, ChartKind::Disk);
+        assert_eq!(c.flips, 0);
+        assert!(!c.overlap);
+        // A planar chart has an exact conformal map (the identity): all measures reach 1.
+        for d in [c.distortion.conformal, c.distortion.area, c.distortion.symmetric_dirichlet] {
+            assert!((d - 1.0).abs() < 1e-9, "{m:?}: {:?}", c.distortion);
+        }
+    }
+}
+
+#[test]
+fn cut_cylinder_is_developable_for_lscm_and_spectral() {
+    let (s, seams) = cut_cylinder(48, 12, 2.0);
+    let mut input = s.input();
+    input.seams = &seams;
+    for m in [Method::Lscm, Method::Spectral(SpectralOptions::default())] {
+        let r = unwrap(&input, &opts(m.clone())).unwrap();
+        assert_eq!(r.charts.len(), 1);
+        let c = &r.charts[0];
+        assert_eq!(c.kind, ChartKind::Disk, "the seam opens the cylinder into a disk");
+        assert_eq!(c.flips, 0);
+        for d in [c.distortion.conformal, c.distortion.area, c.distortion.symmetric_dirichlet] {
+            assert!((d - 1.0).abs() < 1e-9, "{m:?}: {:?}", c.distortion);
+        }
+    }
+    // Without the seam the cylinder is an annulus: LSCM still maps it (two loops).
+    let r = unwrap(&s.input(), &opts(Method::Lscm)).unwrap();
+    assert_eq!(r.charts[0].kind, ChartKind::DiskWithHoles);
+    assert_eq!(r.charts[0].status, ChartStatus::Solved);
+}
+
+#[test]
+fn fixed_boundary_methods_never_flip_on_a_planar_disk_and_land_on_the_circle() {
+    let s = planar_disk(6, 6);
+    for m in all_methods() {
+        let r = unwrap(&s.input(), &opts(m.clone())).unwrap();
+        assert_eq!(r.charts[0].status, ChartStatus::Solved, "{m:?}");
+        let promises_no_flip = !matches!(m, Method::Harmonic { .. });
+        if promises_no_flip {
+            assert_eq!(r.charts[0].flips, 0, "{m:?}");
+        }
+        // Independent re-measurement agrees with the report.
+        let mm = metrics::measure(&s.positions, &s.corner_verts, &s.face_sizes, &r.uv, None).unwrap();
+        assert_eq!(mm.charts, 1);
+        assert_eq!(mm.flips, r.charts[0].flips);
+        assert!((mm.distortion.conformal - r.charts[0].distortion.conformal).abs() < 1e-9);
+    }
+}
+
+fn rigid(s: &Soup) -> Soup {
+    let (a, b) = (0.7f64, -0.4f64);
+    let (ca, sa, cb, sb) = (a.cos(), a.sin(), b.cos(), b.sin());
+    let positions = s
+        .positions
+        .iter()
+        .map(|p| {
+            let x = [ca * p[0] - sa * p[1], sa * p[0] + ca * p[1], p[2]];
+            let y = [x[0], cb * x[1] - sb * x[2], sb * x[1] + cb * x[2]];
+            [y[0] + 3.0, y[1] - 1.0, y[2] + 0.5]
+        })
+        .collect();
+    Soup { positions, corner_verts: s.corner_verts.clone(), face_sizes: s.face_sizes.clone() }
+}
+
+/// Largest distance between two per-corner UV sets after the best similarity of the first
+/// onto the second, relative to the second's size.
+fn similarity_gap(a: &[[f64; 2]], b: &[[f64; 2]]) -> f64 {
+    let mut x = a.to_vec();
+    assert!(metrics::fit_similarity_points(&mut x, b));
+    let size = b.iter().map(|p| p[0].abs().max(p[1].abs())).fold(0.0, f64::max);
+    x.iter().zip(b).map(|(p, q)| (p[0] - q[0]).hypot(p[1] - q[1])).fold(0.0, f64::max) / size
+}
+
+#[test]
+fn rigid_motions_of_the_input_do_not_change_the_map() {
+    let (cyl, seams) = cut_cylinder(24, 6, 1.5);
+    let moved = rigid(&cyl);
+    for m in all_methods() {
+        let mut i1 = cyl.input();
+        i1.seams = &seams;
+        let mut i2 = moved.input();
+        i2.seams = &seams;
+        let r1 = unwrap(&i1, &opts(m.clone())).unwrap();
+        let r2 = unwrap(&i2, &opts(m.clone())).unwrap();
+        let gap = similarity_gap(&r2.uv, &r1.uv);
+        assert!(gap < 1e-7, "{m:?}: gap {gap}");
+        let (d1, d2) = (r1.charts[0].distortion, r2.charts[0].distortion);
+        assert!((d1.conformal - d2.conformal).abs() < 1e-8, "{m:?}");
+    }
+}
+
+#[test]
+fn permuting_faces_permutes_the_output() {
+    let s = planar_disk(5, 6);
+    let nf = s.face_sizes.len();
+    // A fixed pseudo-random permutation.
+    let mut perm: Vec<usize> = (0..nf).collect();
+    let mut state = 12345u64;
+    for i in (1..nf).rev() {
+        state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        perm.swap(i, (state >> 33) as usize % (i + 1));
+    }
+    let mut cv = Vec::new();
+    for &f in &perm {
+        cv.extend_from_slice(&s.corner_verts[3 * f..3 * f + 3]);
+    }
+    let p = Soup { positions: s.positions.clone(), corner_verts: cv, face_sizes: s.face_sizes.clone() };
+    for m in all_methods() {
+        let r1 = unwrap(&s.input(), &opts(m.clone())).unwrap();
+        let r2 = unwrap(&p.input(), &opts(m.clone())).unwrap();
+        let mut back = vec![[0.0; 2]; r1.uv.len()];
+        for (new_f, &old_f) in perm.iter().enumerate() {
+            for k in 0..3 {
+                back[3 * old_f + k] = r2.uv[3 * new_f + k];
+            }
+        }
+        let gap = similarity_gap(&back, &r1.uv);
+        assert!(gap < 1e-9, "{m:?}: gap {gap}");
+    }
+}
+
+#[test]
+fn selection_pins_and_failures() {
+    let s = planar_disk(4, 6);
+    let nf = s.face_sizes.len();
+    let sel: Vec<bool> = (0..nf).map(|f| f % 5 != 0).collect();
+    let mut input = s.input();
+    input.selected = Some(&sel);
+    let r = unwrap(&input, &opts(Method::Lscm)).unwrap();
+    for f in 0..nf {
+        assert_eq!(r.face_chart[f] < 0, !sel[f]);
+    }
+    // Pins: two pinned corners keep their UVs exactly.
+    let pins = [(0u32, [0.25, 0.5]), (10u32, [0.9, 0.1])];
+    let mut input = s.input();
+    input.pins = &pins;
+    for m in [Method::Lscm, Method::Tutte { boundary: BoundaryShape::Circle }, Method::Spectral(SpectralOptions::default())] {
+        let r = unwrap(&input, &opts(m.clone())).unwrap();
+        for &(c, uv) in &pins {
+            assert_eq!(r.uv[c as usize], uv, "{m:?}");
+        }
+    }
+}
+
+#[test]
+fn closed_and_degenerate_inputs_fail_per_chart_or_get_finite_uvs() {
+    // Closed tetrahedron: fails with a reason, no UVs.
+    let p = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    let cv = vec![0, 2, 1, 0, 1, 3, 1, 2, 3, 0, 3, 2];
+    let fs = vec![3u32; 4];
+    let s = Soup { positions: p, corner_verts: cv, face_sizes: fs };
+    let r = unwrap(&s.input(), &opts(Method::Lscm)).unwrap();
+    assert_eq!(r.charts[0].status, ChartStatus::Failed);
+    assert_eq!(r.charts[0].kind, ChartKind::Closed);
+    assert!(r.charts[0].reason.as_ref().unwrap().contains("seam"));
+    assert!(!r.face_solved(0));
+    // Zero-area faces (all points on a line, and one fully collapsed) get finite UVs.
+    let p = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0], [1.0, 1.0, 0.0], [1.0, 0.0, 0.0]];
+    let s = Soup { positions: p, corner_verts: vec![0, 1, 3, 1, 2, 3, 0, 2, 1], face_sizes: vec![3, 3, 3] };
+    for m in all_methods() {
+        if let Ok(r) = unwrap(&s.input(), &opts(m.clone())) {
+            assert!(r.uv.iter().all(|q| q[0].is_finite() && q[1].is_finite()), "{m:?}");
+        }
+    }
+}
