@@ -192,6 +192,9 @@ pub fn unwrap(input: &MeshInput<'_>, options: &UnwrapOptions) -> Result<Unwrappe
         }
     }
     options.method.validate()?;
+    // Charts run in parallel; inside one chart the sparse factorizations of the sizes met in
+    // practice are faster sequential than split across threads.
+    faer::set_global_parallelism(faer::Par::Seq);
 
     let charts = build_charts(&mesh, input.seams, input.selected);
     let mut pin_of_corner: Vec<Option<[f64; 2]>> = vec![None; n_corners];

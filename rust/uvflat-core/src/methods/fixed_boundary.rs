@@ -123,11 +123,12 @@ pub fn boundary_positions(positions: &[[f64; 3]], outer: &[u32], shape: Boundary
     }
 }
 
-/// Triplets of the weighted Laplacian `L` (rows: Σ_j w_ij (x_i − x_j)).
+/// Triplets of the weighted Laplacian `L` (rows: Σ_j w_ij (x_i − x_j)): the lower triangle
+/// for the symmetric weights (uniform, cotangent), every entry for mean value.
 pub fn laplacian_triplets(positions: &[[f64; 3]], triangles: &[[u32; 3]], weights: Weights) -> Vec<(u32, u32, f64)> {
     let mut out = Vec::with_capacity(triangles.len() * 12);
     let push_sym = |i: u32, j: u32, w: f64, out: &mut Vec<(u32, u32, f64)>| {
-        out.extend([(i, i, w), (j, j, w), (i, j, -w), (j, i, -w)]);
+        out.extend([(i, i, w), (j, j, w), (i.max(j), i.min(j), -w)]);
     };
     match weights {
         Weights::Uniform => {

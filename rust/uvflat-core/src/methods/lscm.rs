@@ -23,7 +23,8 @@ use crate::solvers::{FixedValueSolver, Symmetry};
 
 /// Triplets of the LSCM quadratic form (twice the conformal energy E_D − A) over interleaved unknowns `[u0, v0, u1, v1, …]`
 /// (size `2n`), assembled per triangle from corner angles. Symmetric positive semidefinite by
-/// construction (a sum of squares); both triangles of the matrix are emitted.
+/// construction (a sum of squares); only the lower triangle (row ≥ column) is emitted, which
+/// is all the symmetric solver reads.
 pub fn conformal_triplets(triangles: &[[u32; 3]], angles: &[[f64; 3]]) -> Vec<(u32, u32, f64)> {
     let mut out = Vec::with_capacity(triangles.len() * 36);
     for (t, a) in triangles.iter().zip(angles) {
@@ -45,10 +46,16 @@ pub fn conformal_triplets(triangles: &[[u32; 3]], angles: &[[f64; 3]]) -> Vec<(u
                 let (ui, vi) = (2 * v[i], 2 * v[i] + 1);
                 let (uj, vj) = (2 * v[j], 2 * v[j] + 1);
                 // Rows: Re = Σ a u − b v, Im = Σ b u + a v.
-                out.push((ui, uj, w * (ai * aj + bi * bj)));
-                out.push((ui, vj, w * (-ai * bj + bi * aj)));
-                out.push((vi, uj, w * (-bi * aj + ai * bj)));
-                out.push((vi, vj, w * (bi * bj + ai * aj)));
+                for (r, c, val) in [
+                    (ui, uj, ai * aj + bi * bj),
+                    (ui, vj, -ai * bj + bi * aj),
+                    (vi, uj, -bi * aj + ai * bj),
+                    (vi, vj, bi * bj + ai * aj),
+                ] {
+                    if r >= c {
+                        out.push((r, c, w * val));
+                    }
+                }
             }
         }
     }
@@ -171,7 +178,10 @@ mod tests {
         let w = [[0.3, 0.1], [1.1, 0.4], [0.2, 0.8]];
         let trip = conformal_triplets(&[[0, 1, 2]], &[a]);
         let x = [w[0][0], w[0][1], w[1][0], w[1][1], w[2][0], w[2][1]];
-        let e_form: f64 = trip.iter().map(|&(i, j, v)| x[i as usize] * v * x[j as usize]).sum();
+        let e_form: f64 = trip
+            .iter()
+            .map(|&(i, j, v)| if i == j { 1.0 } else { 2.0 } * x[i as usize] * v * x[j as usize])
+            .sum();
         // Dirichlet energy ½∫|∇u|² + |∇v|² = ¼ Σ cot α_k |e_k|²; the form is 2 (E_D − A).
         let mut e_dirichlet = 0.0;
         for k in 0..3 {

@@ -21,10 +21,14 @@ use crate::charts::Chart;
 use crate::geometry::{norm, sub};
 use crate::solvers::{FixedValueSolver, Symmetry};
 
-fn quad(trip: &[(u32, u32, f64)], x: &[f64]) -> Vec<f64> {
+/// y = Q x for Q given by its lower-triangle triplets.
+fn quad(lower: &[(u32, u32, f64)], x: &[f64]) -> Vec<f64> {
     let mut y = vec![0.0; x.len()];
-    for &(i, j, v) in trip {
+    for &(i, j, v) in lower {
         y[i as usize] += v * x[j as usize];
+        if i != j {
+            y[j as usize] += v * x[i as usize];
+        }
     }
     y
 }

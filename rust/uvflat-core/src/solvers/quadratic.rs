@@ -24,8 +24,9 @@ use super::SolveError;
 /// Whether `Q` is symmetric (Cholesky) or general (LU).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Symmetry {
-    /// `Q` symmetric positive (semi)definite; `Q_FF` must be positive definite. Both triangles
-    /// may be given; only the lower one is read.
+    /// `Q` symmetric positive (semi)definite; `Q_FF` must be positive definite. Give the lower
+    /// triangle only (row ≥ column): an entry (r, c) stands for (c, r) too, and entries above
+    /// the diagonal are ignored.
     Symmetric,
     /// `Q` general; `Q_FF` must be non-singular.
     General,
@@ -94,15 +95,16 @@ impl FixedValueSolver {
         let mut slots = Vec::with_capacity(triplets.len());
         for &(r, c, _) in triplets {
             let (fr, fc) = (free_pos[r as usize], free_pos[c as usize]);
-            let slot = if fr == u32::MAX {
-                Slot::Unused
-            } else if fc == u32::MAX {
-                Slot::FreeFixed(fr, fixed_pos[c as usize])
-            } else if symmetry == Symmetry::Symmetric && fr < fc {
-                Slot::Unused
-            } else {
-                pairs.push(Pair { row: fr as usize, col: fc as usize });
-                Slot::FreeFree((pairs.len() - 1) as u32)
+            let slot = match symmetry {
+                // Lower triangle only; an entry (r, c) also stands for (c, r).
+                Symmetry::Symmetric if r < c => Slot::Unused,
+                Symmetry::Symmetric if fr == u32::MAX && fc != u32::MAX => Slot::FreeFixed(fc, fixed_pos[r as usize]),
+                _ if fr == u32::MAX => Slot::Unused,
+                _ if fc == u32::MAX => Slot::FreeFixed(fr, fixed_pos[c as usize]),
+                _ => {
+                    pairs.push(Pair { row: fr as usize, col: fc as usize });
+                    Slot::FreeFree((pairs.len() - 1) as u32)
+                }
             };
             slots.push(slot);
         }
@@ -234,6 +236,7 @@ mod tests {
         let mut t = Vec::new();
         for i in 0..n - 1 {
             let (a, b) = (i as u32, (i + 1) as u32);
+            // Both triangles: the symmetric solver ignores the upper one.
             t.extend([(a, a, 1.0), (b, b, 1.0), (a, b, -1.0), (b, a, -1.0)]);
         }
         for sym in [Symmetry::Symmetric, Symmetry::General] {

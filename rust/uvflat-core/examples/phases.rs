@@ -1,0 +1,47 @@
+//! Time the phases of one LSCM unwrap: `cargo run --release --example phases -- MESH.off`.
+#[path = "../tests/common/mod.rs"]
+mod common;
+
+use std::time::Instant;
+use uvflat_core::charts::build_charts;
+use uvflat_core::mesh::PolyMesh;
+use uvflat_core::methods::{chart_angles, lscm};
+use uvflat_core::solvers::{FixedValueSolver, Symmetry};
+
+fn main() {
+    let path = std::env::args().nth(1).expect("mesh path");
+    let s = common::load(std::path::Path::new(&path));
+    if std::env::var("SEQ").is_ok() { faer::set_global_parallelism(faer::Par::Seq); }
+    for _ in 0..3 {
+        let t = Instant::now();
+        let mesh = PolyMesh::new(&s.positions, &s.corner_verts, &s.face_sizes).unwrap();
+        let t_mesh = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let charts = build_charts(&mesh, &[], None);
+        let t_charts = t.elapsed().as_secs_f64();
+        let c = &charts[0];
+        let t = Instant::now();
+        let ang = chart_angles(&c.positions, &c.triangles);
+        let trip = lscm::conformal_triplets(&c.triangles, &ang);
+        let t_asm = t.elapsed().as_secs_f64();
+        let pins = lscm::auto_pins(c);
+        let t = Instant::now();
+        let fixed = [2 * pins[0].0, 2 * pins[0].0 + 1, 2 * pins[1].0, 2 * pins[1].0 + 1];
+        let solver = FixedValueSolver::new(2 * c.positions.len(), &trip, &fixed, Symmetry::Symmetric).unwrap();
+        let t_factor = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let x = solver.solve(&[vec![0.0, 0.0, 1.0, 0.0]], &[]).unwrap();
+        let t_solve = t.elapsed().as_secs_f64();
+        let uv: Vec<[f64; 2]> = (0..c.positions.len()).map(|i| [x[0][2 * i], x[0][2 * i + 1]]).collect();
+        let t = Instant::now();
+        let m = uvflat_core::metrics::chart_metrics(&c.positions, &c.triangles, &uv, &c.boundary_loops);
+        let t_metrics = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let r = uvflat_core::unwrap(&s.input(), &Default::default()).unwrap();
+        let t_all = t.elapsed().as_secs_f64();
+        println!(
+            "mesh {t_mesh:.4} charts {t_charts:.4} assemble {t_asm:.4} analyse+factor {t_factor:.4} solve {t_solve:.4} metrics {t_metrics:.4} | unwrap {t_all:.4} flips {} {}",
+            m.flips, r.charts[0].flips
+        );
+    }
+}
