@@ -78,14 +78,18 @@ fn as_float(name: &'static str, v: &OptionValue) -> Result<f64> {
     match v {
         OptionValue::Float(x) => Ok(*x),
         OptionValue::Int(i) => Ok(*i as f64),
-        other => Err(opt_err(name, format!("expected a number, got {other:?}"))),
+        OptionValue::Bool(b) => Err(opt_err(name, format!("expected a number, got the boolean {b}"))),
+        OptionValue::Str(s) => Err(opt_err(name, format!("expected a number, got the string {s:?}"))),
     }
 }
 
 fn as_count(name: &'static str, v: &OptionValue) -> Result<usize> {
     match v {
         OptionValue::Int(i) if *i >= 1 => Ok(*i as usize),
-        other => Err(opt_err(name, format!("expected a positive integer, got {other:?}"))),
+        OptionValue::Int(i) => Err(opt_err(name, format!("expected a positive integer, got {i}"))),
+        OptionValue::Float(x) => Err(opt_err(name, format!("expected a positive integer, got {x}"))),
+        OptionValue::Bool(b) => Err(opt_err(name, format!("expected a positive integer, got the boolean {b}"))),
+        OptionValue::Str(s) => Err(opt_err(name, format!("expected a positive integer, got the string {s:?}"))),
     }
 }
 

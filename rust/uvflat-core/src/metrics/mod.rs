@@ -151,6 +151,10 @@ pub fn chart_metrics(
             sum = [f64::INFINITY; 3];
         }
     }
+    if !(area3 > 0.0) {
+        // No 3D area: distortion is undefined, not perfect.
+        sum = [f64::NAN; 3];
+    }
     let overlap = boundary_self_overlap(uv, boundary_loops);
     ChartMetrics {
         faces: triangles.len(),
@@ -440,7 +444,7 @@ pub fn measure(
 /// Combine per-chart metrics into whole-mesh metrics (distortion weighted by 3D area).
 pub fn aggregate(per_chart: Vec<ChartMetrics>) -> MeshMetrics {
     let total: f64 = per_chart.iter().map(|c| c.area_3d).sum();
-    let mut d = [0.0f64; 3];
+    let mut d = if total > 0.0 { [0.0f64; 3] } else { [f64::NAN; 3] };
     for c in &per_chart {
         if c.area_3d > 0.0 && total > 0.0 {
             let w = c.area_3d / total;

@@ -1,0 +1,285 @@
+"""uvflat: fast UV unwrapping (parameterization) of polygon meshes.
+
+Inputs describe a polygon soup: ``positions`` (V, 3) float, ``corner_verts`` (C,) int (the
+vertex of every face corner, faces one after another) and ``face_sizes`` (F,) int (corners per
+face, summing to C). UVs are per corner. Any integer dtype is accepted for indices and any
+float (or integer) dtype for coordinates; everything is converted to uint32 / float64.
+"""
+
+from typing import Any, Final, Literal, TypedDict
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: Final[str]
+
+METHODS: Final[tuple[str, ...]]
+"""Names accepted by ``unwrap(method=...)``, e.g. ``("tutte", "harmonic", "mean_value", "lscm", "spectral")``."""
+
+_ChartKind = Literal["disk", "disk_with_holes", "closed", "higher_genus"]
+_ChartStatus = Literal["solved", "fallback", "failed"]
+
+_Floats = npt.ArrayLike
+_Ints = npt.ArrayLike
+_Bools = npt.ArrayLike
+
+class ChartReport:
+    """Report of one chart (island) of an unwrap: topology, outcome and quality."""
+
+    @property
+    def id(self) -> int:
+        """Chart id, as in ``UnwrapResult.chart``."""
+    @property
+    def method(self) -> str:
+        """Method that produced the UVs (the fallback's name when ``status == "fallback"``)."""
+    @property
+    def faces(self) -> int:
+        """Number of input faces (polygons) in the chart."""
+    @property
+    def triangles(self) -> int:
+        """Number of triangles after n-gon triangulation."""
+    @property
+    def vertices(self) -> int:
+        """Number of chart vertices (a vertex split by a seam counts once per side)."""
+    @property
+    def boundary_loops(self) -> int:
+        """Number of boundary loops."""
+    @property
+    def genus(self) -> int:
+        """Genus, from the Euler characteristic."""
+    @property
+    def kind(self) -> _ChartKind:
+        """Topological class: "disk", "disk_with_holes", "closed" or "higher_genus"."""
+    @property
+    def status(self) -> _ChartStatus:
+        """"solved", "fallback" (mapped by another method, see ``reason``) or "failed" (no UVs)."""
+    @property
+    def reason(self) -> str | None:
+        """Why the chart failed or fell back, or a note on how pins were honoured."""
+    @property
+    def iterations(self) -> int:
+        """Iterations of an iterative method (0 for direct solves)."""
+    @property
+    def residual(self) -> float:
+        """Final residual or energy change of the method (0 for direct solves)."""
+    @property
+    def flips(self) -> int:
+        """Flipped or zero-area UV triangles (0 for failed charts)."""
+    @property
+    def overlap(self) -> bool:
+        """Whether the chart's UV boundary crosses itself."""
+    @property
+    def conformal(self) -> float:
+        """Conformal distortion, area-weighted mean of sigma1/sigma2 (1 is perfect; NaN if failed)."""
+    @property
+    def area(self) -> float:
+        """Area distortion, area-weighted mean of max(J, 1/J) (1 is perfect; NaN if failed)."""
+    @property
+    def symmetric_dirichlet(self) -> float:
+        """Symmetric Dirichlet energy (1 is perfect; NaN if failed)."""
+    @property
+    def seconds(self) -> float:
+        """Wall-clock seconds spent mapping this chart."""
+    def as_dict(self) -> dict[str, Any]:
+        """All fields as a plain dict."""
+
+class UnwrapResult:
+    """Result of :func:`unwrap`."""
+
+    @property
+    def uv(self) -> npt.NDArray[np.float64]:
+        """UV of every corner, shape (C, 2), float64; (0, 0) where a face got no UVs."""
+    @property
+    def chart(self) -> npt.NDArray[np.int32]:
+        """Chart id of every face, shape (F,), int32; -1 for unselected faces."""
+    @property
+    def face_solved(self) -> npt.NDArray[np.bool_]:
+        """Whether each face received UVs (its chart was solved or fell back), shape (F,)."""
+    @property
+    def charts(self) -> list[ChartReport]:
+        """One report per chart, indexed by chart id."""
+    @property
+    def seconds(self) -> float:
+        """Wall-clock seconds of the whole unwrap in the core."""
+    @property
+    def method(self) -> str:
+        """Name of the requested method."""
+    def as_dict(self) -> dict[str, Any]:
+        """All fields as a plain dict (arrays included, chart reports as dicts)."""
+
+class _ChartMetricsDict(TypedDict):
+    """One entry of ``Metrics.per_chart``."""
+
+    faces: int
+    flips: int
+    overlap: bool
+    conformal: float
+    area: float
+    symmetric_dirichlet: float
+    area_3d: float
+    """3D surface area of the island (its weight in the whole-map averages)."""
+
+class Metrics:
+    """Quality of a given UV map, from :func:`metrics`.
+
+    Each chart's UVs are scaled so its UV area equals its 3D area before measuring, and
+    averages are weighted by 3D triangle area.
+    """
+
+    @property
+    def charts(self) -> int:
+        """Number of UV islands (faces connected through edges whose UVs agree at both ends)."""
+    @property
+    def flips(self) -> int:
+        """Triangles whose signed UV area opposes their chart's majority, plus zero-area ones."""
+    @property
+    def overlapping_charts(self) -> int:
+        """Charts whose UV boundary crosses itself."""
+    @property
+    def conformal(self) -> float:
+        """Conformal distortion, area-weighted mean of sigma1/sigma2 (1 is perfect)."""
+    @property
+    def area(self) -> float:
+        """Area distortion, area-weighted mean of max(sigma1*sigma2, 1/(sigma1*sigma2)) (1 is perfect)."""
+    @property
+    def symmetric_dirichlet(self) -> float:
+        """Symmetric Dirichlet energy, mean of (s1^2 + s2^2 + s1^-2 + s2^-2)/4 (1 is perfect)."""
+    @property
+    def per_chart(self) -> list[_ChartMetricsDict]:
+        """Per-island faces, flips, overlap, distortions and 3D area."""
+    def as_dict(self) -> dict[str, Any]:
+        """All fields as a plain dict."""
+
+def unwrap(
+    positions: _Floats,
+    corner_verts: _Ints,
+    face_sizes: _Ints,
+    *,
+    method: str = "lscm",
+    seams: _Ints | None = None,
+    selected: _Bools | None = None,
+    pins: _Ints | None = None,
+    pin_uvs: _Floats | None = None,
+    fit_to: _Floats | None = None,
+    **options: bool | int | float | str,
+) -> UnwrapResult:
+    """Unwrap the selected faces of a polygon mesh into per-corner UVs.
+
+    The selection is split into charts along seams, non-manifold edges and the selection
+    border; every chart is mapped by ``method`` (charts in parallel, without the GIL).
+    Charts that cannot be mapped (e.g. a closed surface without seams) are not errors: they
+    come back with ``status == "failed"`` and a ``reason``, and their faces get no UVs.
+
+    Args:
+        positions: (V, 3) vertex positions.
+        corner_verts: (C,) vertex index of every corner, faces one after another.
+        face_sizes: (F,) corners per face (each >= 3), summing to C.
+        method: one of :data:`METHODS`.
+        seams: (E, 2) seam edges as vertex pairs (either order).
+        selected: (F,) faces to unwrap; default all. Unselected faces get chart -1.
+        pins: (P,) corner indices whose UVs are fixed.
+        pin_uvs: (P, 2) the UVs of the pinned corners (required with ``pins``).
+        fit_to: (C, 2) previous UVs: each unpinned chart is fitted (scale, rotation,
+            translation) onto them instead of being area-scaled at the origin.
+        **options: method options: ``boundary="circle"|"square"`` for tutte, harmonic and
+            mean_value; ``max_iterations: int`` and ``tolerance: float`` for spectral.
+
+    Raises:
+        InputError: wrong shape, dtype or length; a non-finite ``fit_to`` UV.
+        VertexIndexError, NonFiniteError, FaceSizeError, RepeatedVertexError, SeamError:
+            malformed mesh (all subclasses of MeshError).
+        PinError: a pin names a missing corner or has a non-finite UV.
+        OptionError: unknown method, unknown option or bad option value.
+        UvflatError: an internal error (a bug), never a crash.
+    """
+
+def metrics(
+    positions: _Floats,
+    corner_verts: _Ints,
+    face_sizes: _Ints,
+    uv: _Floats,
+    *,
+    selected: _Bools | None = None,
+) -> Metrics:
+    """Measure a per-corner UV map: islands, flipped triangles, overlaps and distortion.
+
+    Islands are faces connected through edges whose two corner UVs agree at both ends.
+    Uses the same definitions as the per-chart reports of :func:`unwrap`, so numbers compare.
+
+    Args:
+        positions: (V, 3) vertex positions.
+        corner_verts: (C,) vertex index of every corner.
+        face_sizes: (F,) corners per face.
+        uv: (C, 2) UV of every corner.
+        selected: (F,) faces to measure; default all.
+
+    Raises:
+        InputError: wrong shape, dtype or length; a non-finite UV (``err.corner``).
+        MeshError: malformed mesh (see :func:`unwrap`).
+    """
+
+class UvflatError(Exception):
+    """Base class of every error raised by uvflat."""
+
+class InputError(UvflatError, ValueError):
+    """An argument has the wrong type, dtype, shape or length, or a UV is not finite."""
+
+    argument: str | None
+    """Name of the offending argument."""
+    shape: tuple[int, ...] | None
+    """Shape received, for shape errors."""
+    corner: int | None
+    """Corner of a non-finite UV, if that is the problem."""
+
+class MeshError(UvflatError, ValueError):
+    """The mesh itself is malformed; the subclass says how."""
+
+class VertexIndexError(MeshError):
+    """A corner refers to a vertex index outside 0..n_vertices."""
+
+    face: int | None
+    corner: int
+    vertex: int
+    """The bad vertex index as given (may be negative)."""
+    n_vertices: int
+
+class NonFiniteError(MeshError):
+    """A vertex position is NaN or infinite."""
+
+    vertex: int
+    value: float
+
+class FaceSizeError(MeshError):
+    """A face has fewer than three corners (or an impossible size)."""
+
+    face: int
+    size: int
+
+class RepeatedVertexError(MeshError):
+    """A face uses the same vertex more than once."""
+
+    face: int
+    vertex: int
+
+class SeamError(MeshError):
+    """A seam refers to a vertex index outside 0..n_vertices."""
+
+    seam: int
+    """Row of ``seams``."""
+    vertex: int
+    n_vertices: int
+
+class PinError(UvflatError, ValueError):
+    """A pin refers to a corner that does not exist, or its UV is not finite."""
+
+    pin: int
+    """Row of ``pins``."""
+    corner: int
+    n_corners: int | None
+
+class OptionError(UvflatError, ValueError):
+    """Unknown method, unknown option, or an option value outside its domain."""
+
+    option: str
+    """Name of the option ("method" for an unknown method)."""
+    reason: str

@@ -1,0 +1,293 @@
+//! Python bindings of `uvflat-core` (native module `uvflat._uvflat`).
+//!
+//! A thin layer: it checks argument shapes and dtypes, copies numpy inputs into owned Rust
+//! buffers, runs the core without the GIL (`Python::detach`) and inside `catch_unwind`, maps
+//! every [`UvError`] to its Python exception and returns numpy arrays. No numerics here.
+
+mod convert;
+mod errors;
+mod results;
+
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::time::Instant;
+
+use numpy::{PyArray1, PyArrayMethods};
+use pyo3::prelude::*;
+use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyString, PyTuple};
+use uvflat_core::methods::{method_names, Method, OptionValue};
+use uvflat_core::{Fit, MeshInput, UnwrapOptions, UvError};
+
+use convert::{floats, indices, Layout};
+use errors::{attrs, error, internal_error, map_uv_error, Kind};
+use results::{PyChartReport, PyMetrics, PyUnwrapResult};
+
+/// Run `f` without the GIL; a panic becomes `UvflatError`, a core error its exception.
+fn run_core<T: Send>(
+    py: Python<'_>,
+    uv_argument: &str,
+    f: impl FnOnce() -> Result<T, UvError> + Send,
+) -> PyResult<T> {
+    match py.detach(move || catch_unwind(AssertUnwindSafe(f))) {
+        Ok(Ok(v)) => Ok(v),
+        Ok(Err(e)) => Err(map_uv_error(py, e, uv_argument)),
+        Err(payload) => Err(internal_error(py, payload)),
+    }
+}
+
+/// The polygon soup shared by `unwrap` and `metrics`, converted and index-checked.
+struct Soup {
+    positions: Vec<[f64; 3]>,
+    corner_verts: Vec<u32>,
+    face_sizes: Vec<u32>,
+}
+
+fn read_soup(
+    positions: &Bound<'_, PyAny>,
+    corner_verts: &Bound<'_, PyAny>,
+    face_sizes: &Bound<'_, PyAny>,
+) -> PyResult<Soup> {
+    let py = positions.py();
+    let (pos, n_vertices) = floats(positions, "positions", Layout::Rows("V", 3))?;
+    let (face_sizes, _) = indices(face_sizes, "face_sizes", Layout::Vector("F"), |face, size| {
+        let msg = if size < 0 {
+            format!("face {face}: has {size} corners, at least 3 are needed")
+        } else {
+            format!("face {face}: size {size} is larger than any mesh can have")
+        };
+        error(py, Kind::FaceSize, msg, attrs![py; "face" => face, "size" => size])
+    })?;
+    // Corner -> face only matters for the error message of a bad index.
+    let face_of_corner = |corner: usize| -> Option<usize> {
+        let mut end = 0usize;
+        for (f, &s) in face_sizes.iter().enumerate() {
+            end += s as usize;
+            if corner < end {
+                return Some(f);
+            }
+        }
+        None
+    };
+    let (corner_verts, _) = indices(corner_verts, "corner_verts", Layout::Vector("C"), |corner, vertex| {
+        let face = face_of_corner(corner);
+        let at = match face {
+            Some(f) => format!("face {f}, corner {corner}"),
+            None => format!("corner {corner}"),
+        };
+        error(
+            py,
+            Kind::VertexIndex,
+            format!("{at}: vertex index {vertex} out of range (mesh has {n_vertices} vertices)"),
+            attrs![py; "face" => face, "corner" => corner, "vertex" => vertex, "n_vertices" => n_vertices],
+        )
+    })?;
+    Ok(Soup { positions: convert::rows::<3, f64>(&pos), corner_verts, face_sizes })
+}
+
+fn read_selected(selected: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Vec<bool>>> {
+    selected.filter(|s| !s.is_none()).map(|s| convert::bools(s, "selected", Layout::Vector("F"))).transpose()
+}
+
+/// Convert keyword options to the core's option list.
+fn read_options(py: Python<'_>, options: Option<&Bound<'_, PyDict>>) -> PyResult<Vec<(String, OptionValue)>> {
+    let mut out = Vec::new();
+    let Some(options) = options else { return Ok(out) };
+    for (k, v) in options.iter() {
+        let name: String = k.extract()?;
+        let value = if v.is_instance_of::<PyBool>() {
+            OptionValue::Bool(v.extract()?)
+        } else if v.is_instance_of::<PyString>() {
+            OptionValue::Str(v.extract()?)
+        } else if v.is_instance_of::<PyFloat>() {
+            OptionValue::Float(v.extract()?)
+        } else if v.is_instance_of::<PyInt>() {
+            OptionValue::Int(v.extract().map_err(|_| {
+                let reason = format!("integer {v} does not fit in 64 bits");
+                error(
+                    py,
+                    Kind::Option,
+                    format!("option {name}: {reason}"),
+                    attrs![py; "option" => name.clone(), "reason" => reason],
+                )
+            })?)
+        } else if let Ok(i) = v.extract::<i64>() {
+            // Integer-like objects (numpy integers) via __index__.
+            OptionValue::Int(i)
+        } else if let Ok(x) = v.extract::<f64>() {
+            // Float-like objects (numpy float32) via __float__.
+            OptionValue::Float(x)
+        } else {
+            let ty = v.get_type().name().map(|n| n.to_string()).unwrap_or_else(|_| "?".into());
+            let reason = format!("unsupported value of type {ty} (use bool, int, float or str)");
+            return Err(error(
+                py,
+                Kind::Option,
+                format!("option {name}: {reason}"),
+                attrs![py; "option" => name.clone(), "reason" => reason],
+            ));
+        };
+        out.push((name, value));
+    }
+    Ok(out)
+}
+
+/// Unwrap the selected faces of a polygon mesh into per-corner UVs.
+///
+/// See the package documentation (`uvflat.unwrap`) for the arguments.
+#[pyfunction]
+#[pyo3(signature = (positions, corner_verts, face_sizes, *, method = "lscm", seams = None, selected = None,
+                    pins = None, pin_uvs = None, fit_to = None, **options))]
+#[allow(clippy::too_many_arguments)]
+fn unwrap(
+    py: Python<'_>,
+    positions: &Bound<'_, PyAny>,
+    corner_verts: &Bound<'_, PyAny>,
+    face_sizes: &Bound<'_, PyAny>,
+    method: &str,
+    seams: Option<&Bound<'_, PyAny>>,
+    selected: Option<&Bound<'_, PyAny>>,
+    pins: Option<&Bound<'_, PyAny>>,
+    pin_uvs: Option<&Bound<'_, PyAny>>,
+    fit_to: Option<&Bound<'_, PyAny>>,
+    options: Option<&Bound<'_, PyDict>>,
+) -> PyResult<PyUnwrapResult> {
+    let opts = read_options(py, options)?;
+    let method = Method::parse(method, &opts).map_err(|e| map_uv_error(py, e, "fit_to"))?;
+    let soup = read_soup(positions, corner_verts, face_sizes)?;
+    let n_vertices = soup.positions.len();
+    let n_corners = soup.corner_verts.len();
+
+    let seams: Vec<[u32; 2]> = match seams.filter(|s| !s.is_none()) {
+        None => Vec::new(),
+        Some(s) => {
+            let (flat, _) = indices(s, "seams", Layout::Rows("E", 2), |i, vertex| {
+                let seam = i / 2;
+                error(
+                    py,
+                    Kind::Seam,
+                    format!("seam {seam}: vertex index {vertex} out of range (mesh has {n_vertices} vertices)"),
+                    attrs![py; "seam" => seam, "vertex" => vertex, "n_vertices" => n_vertices],
+                )
+            })?;
+            convert::rows::<2, u32>(&flat)
+        }
+    };
+    let selected = read_selected(selected)?;
+
+    let pins = pins.filter(|p| !p.is_none());
+    let pin_uvs = pin_uvs.filter(|p| !p.is_none());
+    let pins: Vec<(u32, [f64; 2])> = match (pins, pin_uvs) {
+        (None, None) => Vec::new(),
+        (Some(_), None) => return Err(errors::input_error(py, "pin_uvs", "pin_uvs: required when pins is given")),
+        (None, Some(_)) => return Err(errors::input_error(py, "pins", "pins: required when pin_uvs is given")),
+        (Some(p), Some(u)) => {
+            let (corners, n_pins) = indices(p, "pins", Layout::Vector("P"), |pin, corner| {
+                error(
+                    py,
+                    Kind::Pin,
+                    format!("pin {pin}: corner index {corner} out of range (mesh has {n_corners} corners)"),
+                    attrs![py; "pin" => pin, "corner" => corner, "n_corners" => n_corners],
+                )
+            })?;
+            let (uvs, n_uvs) = floats(u, "pin_uvs", Layout::Rows("P", 2))?;
+            if n_uvs != n_pins {
+                return Err(error(
+                    py,
+                    Kind::Input,
+                    format!("pin_uvs: has {n_uvs} rows, pins has {n_pins} entries"),
+                    attrs![py; "argument" => "pin_uvs"],
+                ));
+            }
+            corners.into_iter().zip(convert::rows::<2, f64>(&uvs)).collect()
+        }
+    };
+    let fit = match fit_to.filter(|f| !f.is_none()) {
+        None => Fit::AreaScaled,
+        Some(f) => Fit::Previous(convert::rows::<2, f64>(&floats(f, "fit_to", Layout::Rows("C", 2))?.0)),
+    };
+
+    let method_name = method.name().to_string();
+    let unwrap_options = UnwrapOptions { method, fit };
+    let (result, seconds) = run_core(py, "fit_to", || {
+        let start = Instant::now();
+        let input = MeshInput {
+            positions: &soup.positions,
+            corner_verts: &soup.corner_verts,
+            face_sizes: &soup.face_sizes,
+            seams: &seams,
+            selected: selected.as_deref(),
+            pins: &pins,
+        };
+        let r = uvflat_core::unwrap(&input, &unwrap_options)?;
+        Ok((r, start.elapsed().as_secs_f64()))
+    })?;
+
+    let n_faces = result.face_chart.len();
+    let face_solved: Vec<bool> = (0..n_faces).map(|f| result.face_solved(f)).collect();
+    let flat_uv: Vec<f64> = result.uv.iter().flat_map(|p| [p[0], p[1]]).collect();
+    let uv = PyArray1::from_vec(py, flat_uv).reshape([result.uv.len(), 2])?;
+    let charts = result
+        .charts
+        .iter()
+        .map(|r| Py::new(py, PyChartReport::from(r)))
+        .collect::<PyResult<Vec<_>>>()?;
+    Ok(PyUnwrapResult {
+        uv: uv.unbind(),
+        chart: PyArray1::from_vec(py, result.face_chart).unbind(),
+        face_solved: PyArray1::from_vec(py, face_solved).unbind(),
+        charts,
+        seconds,
+        method: method_name,
+    })
+}
+
+/// Measure a given per-corner UV map: islands, flips, overlaps, distortion.
+///
+/// See the package documentation (`uvflat.metrics`) for the arguments.
+#[pyfunction]
+#[pyo3(signature = (positions, corner_verts, face_sizes, uv, *, selected = None))]
+fn metrics(
+    py: Python<'_>,
+    positions: &Bound<'_, PyAny>,
+    corner_verts: &Bound<'_, PyAny>,
+    face_sizes: &Bound<'_, PyAny>,
+    uv: &Bound<'_, PyAny>,
+    selected: Option<&Bound<'_, PyAny>>,
+) -> PyResult<PyMetrics> {
+    let soup = read_soup(positions, corner_verts, face_sizes)?;
+    let (uv_flat, _) = floats(uv, "uv", Layout::Rows("C", 2))?;
+    let uv = convert::rows::<2, f64>(&uv_flat);
+    let selected = read_selected(selected)?;
+    let m = run_core(py, "uv", || {
+        uvflat_core::metrics::measure(
+            &soup.positions,
+            &soup.corner_verts,
+            &soup.face_sizes,
+            &uv,
+            selected.as_deref(),
+        )
+    })?;
+    Ok(PyMetrics::from(m))
+}
+
+/// Raise the error a panic in the core turns into (lets the test-suite check that a panic
+/// never crosses into Python). Not part of the public API.
+#[pyfunction]
+fn _internal_panic_check(py: Python<'_>) -> PyResult<()> {
+    run_core(py, "", || -> Result<(), UvError> { panic!("deliberate panic to check the boundary") })
+}
+
+/// Native module of the `uvflat` package.
+#[pymodule]
+fn _uvflat(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let py = m.py();
+    m.add_function(wrap_pyfunction!(unwrap, m)?)?;
+    m.add_function(wrap_pyfunction!(metrics, m)?)?;
+    m.add_function(wrap_pyfunction!(_internal_panic_check, m)?)?;
+    m.add_class::<PyUnwrapResult>()?;
+    m.add_class::<PyChartReport>()?;
+    m.add_class::<PyMetrics>()?;
+    m.add("METHODS", PyTuple::new(py, method_names())?)?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    errors::register(m)?;
+    Ok(())
+}

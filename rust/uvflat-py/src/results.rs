@@ -1,0 +1,328 @@
+//! Result and report classes returned to Python (immutable).
+
+use numpy::{PyArray1, PyArray2, PyUntypedArrayMethods};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+use uvflat_core::metrics::{ChartMetrics, MeshMetrics};
+use uvflat_core::{ChartReport, Distortion};
+
+fn fmt_f(x: f64) -> String {
+    if x.is_nan() {
+        "nan".to_string()
+    } else {
+        format!("{x:.6}")
+    }
+}
+
+/// Report of one chart (island) of an unwrap: topology, outcome and quality.
+#[pyclass(frozen, get_all, module = "uvflat", name = "ChartReport")]
+#[derive(Debug, Clone)]
+pub struct PyChartReport {
+    /// Chart id, as in `UnwrapResult.chart`.
+    pub id: usize,
+    /// Method that produced the UVs (the fallback's name when status is "fallback").
+    pub method: String,
+    /// Number of input faces (polygons).
+    pub faces: usize,
+    /// Number of triangles after n-gon triangulation.
+    pub triangles: usize,
+    /// Number of chart vertices (a vertex split by a seam counts once per side).
+    pub vertices: usize,
+    /// Number of boundary loops.
+    pub boundary_loops: usize,
+    /// Genus.
+    pub genus: usize,
+    /// "disk", "disk_with_holes", "closed" or "higher_genus".
+    pub kind: String,
+    /// "solved", "fallback" or "failed".
+    pub status: String,
+    /// Why the chart failed or fell back, or a note on pins; None otherwise.
+    pub reason: Option<String>,
+    /// Iterations of an iterative method (0 for direct solves).
+    pub iterations: usize,
+    /// Final residual reported by the method (0 for direct solves).
+    pub residual: f64,
+    /// Flipped or zero-area UV triangles.
+    pub flips: usize,
+    /// Whether the chart's UV boundary crosses itself.
+    pub overlap: bool,
+    /// Conformal distortion (area-weighted mean of sigma1/sigma2; 1 is perfect; NaN if failed).
+    pub conformal: f64,
+    /// Area distortion (1 is perfect; NaN if failed).
+    pub area: f64,
+    /// Symmetric Dirichlet energy (1 is perfect; NaN if failed).
+    pub symmetric_dirichlet: f64,
+    /// Wall-clock seconds spent on this chart.
+    pub seconds: f64,
+}
+
+impl From<&ChartReport> for PyChartReport {
+    fn from(r: &ChartReport) -> Self {
+        PyChartReport {
+            id: r.id,
+            method: r.method.to_string(),
+            faces: r.faces,
+            triangles: r.triangles,
+            vertices: r.vertices,
+            boundary_loops: r.boundary_loops,
+            genus: r.genus,
+            kind: r.kind.name().to_string(),
+            status: r.status.name().to_string(),
+            reason: r.reason.clone(),
+            iterations: r.iterations,
+            residual: r.residual,
+            flips: r.flips,
+            overlap: r.overlap,
+            conformal: r.distortion.conformal,
+            area: r.distortion.area,
+            symmetric_dirichlet: r.distortion.symmetric_dirichlet,
+            seconds: r.seconds,
+        }
+    }
+}
+
+impl PyChartReport {
+    fn dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        d.set_item("id", self.id)?;
+        d.set_item("method", &self.method)?;
+        d.set_item("faces", self.faces)?;
+        d.set_item("triangles", self.triangles)?;
+        d.set_item("vertices", self.vertices)?;
+        d.set_item("boundary_loops", self.boundary_loops)?;
+        d.set_item("genus", self.genus)?;
+        d.set_item("kind", &self.kind)?;
+        d.set_item("status", &self.status)?;
+        d.set_item("reason", &self.reason)?;
+        d.set_item("iterations", self.iterations)?;
+        d.set_item("residual", self.residual)?;
+        d.set_item("flips", self.flips)?;
+        d.set_item("overlap", self.overlap)?;
+        d.set_item("conformal", self.conformal)?;
+        d.set_item("area", self.area)?;
+        d.set_item("symmetric_dirichlet", self.symmetric_dirichlet)?;
+        d.set_item("seconds", self.seconds)?;
+        Ok(d)
+    }
+}
+
+#[pymethods]
+impl PyChartReport {
+    /// All fields as a plain dict.
+    fn as_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        self.dict(py)
+    }
+
+    fn __repr__(&self) -> String {
+        let mut s = format!(
+            "ChartReport(id={}, status='{}', method='{}', kind='{}', faces={}, flips={}, overlap={}, conformal={}",
+            self.id,
+            self.status,
+            self.method,
+            self.kind,
+            self.faces,
+            self.flips,
+            if self.overlap { "True" } else { "False" },
+            fmt_f(self.conformal),
+        );
+        if let Some(r) = &self.reason {
+            s.push_str(&format!(", reason={r:?}"));
+        }
+        s.push(')');
+        s
+    }
+}
+
+/// Result of `uvflat.unwrap`: per-corner UVs, per-face charts and one report per chart.
+#[pyclass(frozen, module = "uvflat", name = "UnwrapResult")]
+pub struct PyUnwrapResult {
+    pub uv: Py<PyArray2<f64>>,
+    pub chart: Py<PyArray1<i32>>,
+    pub face_solved: Py<PyArray1<bool>>,
+    pub charts: Vec<Py<PyChartReport>>,
+    pub seconds: f64,
+    pub method: String,
+}
+
+impl PyUnwrapResult {
+    fn reports<'a>(&'a self, py: Python<'a>) -> impl Iterator<Item = &'a PyChartReport> + 'a {
+        self.charts.iter().map(move |c| c.bind(py).get())
+    }
+}
+
+#[pymethods]
+impl PyUnwrapResult {
+    /// UV of every corner, shape (C, 2), float64; (0, 0) where a face got no UVs.
+    #[getter]
+    fn uv<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        self.uv.bind(py).clone()
+    }
+
+    /// Chart id of every face, shape (F,), int32; -1 for unselected faces.
+    #[getter]
+    fn chart<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i32>> {
+        self.chart.bind(py).clone()
+    }
+
+    /// Whether every face received UVs, shape (F,), bool.
+    #[getter]
+    fn face_solved<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<bool>> {
+        self.face_solved.bind(py).clone()
+    }
+
+    /// One ChartReport per chart, indexed by chart id.
+    #[getter]
+    fn charts<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
+        PyList::new(py, self.charts.iter().map(|c| c.clone_ref(py)))
+    }
+
+    /// Wall-clock seconds of the whole unwrap (validation, charting, solving, measuring).
+    #[getter]
+    fn seconds(&self) -> f64 {
+        self.seconds
+    }
+
+    /// Name of the requested method.
+    #[getter]
+    fn method(&self) -> &str {
+        &self.method
+    }
+
+    /// All fields as a plain dict (arrays included, reports as dicts).
+    fn as_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        d.set_item("method", &self.method)?;
+        d.set_item("uv", self.uv.bind(py))?;
+        d.set_item("chart", self.chart.bind(py))?;
+        d.set_item("face_solved", self.face_solved.bind(py))?;
+        let reports = self.reports(py).map(|r| r.dict(py)).collect::<PyResult<Vec<_>>>()?;
+        d.set_item("charts", PyList::new(py, reports)?)?;
+        d.set_item("seconds", self.seconds)?;
+        Ok(d)
+    }
+
+    fn __repr__(&self, py: Python<'_>) -> String {
+        let (mut solved, mut fallback, mut failed, mut flips) = (0usize, 0usize, 0usize, 0usize);
+        for r in self.reports(py) {
+            match r.status.as_str() {
+                "solved" => solved += 1,
+                "fallback" => fallback += 1,
+                _ => failed += 1,
+            }
+            flips += r.flips;
+        }
+        format!(
+            "UnwrapResult(method='{}', corners={}, faces={}, charts={} (solved {}, fallback {}, failed {}), flips={}, seconds={:.4})",
+            self.method,
+            self.uv.bind(py).shape()[0],
+            self.chart.bind(py).len(),
+            self.charts.len(),
+            solved,
+            fallback,
+            failed,
+            flips,
+            self.seconds
+        )
+    }
+}
+
+
+fn distortion_items(d: &Bound<'_, PyDict>, dist: &Distortion) -> PyResult<()> {
+    d.set_item("conformal", dist.conformal)?;
+    d.set_item("area", dist.area)?;
+    d.set_item("symmetric_dirichlet", dist.symmetric_dirichlet)?;
+    Ok(())
+}
+
+/// Quality of a given UV map, from `uvflat.metrics`.
+#[pyclass(frozen, module = "uvflat", name = "Metrics")]
+pub struct PyMetrics {
+    charts: usize,
+    flips: usize,
+    overlapping_charts: usize,
+    distortion: Distortion,
+    per_chart: Vec<ChartMetrics>,
+}
+
+impl From<MeshMetrics> for PyMetrics {
+    fn from(m: MeshMetrics) -> Self {
+        PyMetrics {
+            charts: m.charts,
+            flips: m.flips,
+            overlapping_charts: m.overlapping_charts,
+            distortion: m.distortion,
+            per_chart: m.per_chart,
+        }
+    }
+}
+
+fn chart_metrics_dict<'py>(py: Python<'py>, c: &ChartMetrics) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("faces", c.faces)?;
+    d.set_item("flips", c.flips)?;
+    d.set_item("overlap", c.overlap)?;
+    distortion_items(&d, &c.distortion)?;
+    d.set_item("area_3d", c.area_3d)?;
+    Ok(d)
+}
+
+#[pymethods]
+impl PyMetrics {
+    /// Number of UV islands (faces connected through edges whose UVs agree at both ends).
+    #[getter]
+    fn charts(&self) -> usize {
+        self.charts
+    }
+    /// Flipped or zero-area UV triangles, over all charts.
+    #[getter]
+    fn flips(&self) -> usize {
+        self.flips
+    }
+    /// Charts whose UV boundary crosses itself.
+    #[getter]
+    fn overlapping_charts(&self) -> usize {
+        self.overlapping_charts
+    }
+    /// Conformal distortion (area-weighted mean of sigma1/sigma2; 1 is perfect).
+    #[getter]
+    fn conformal(&self) -> f64 {
+        self.distortion.conformal
+    }
+    /// Area distortion (area-weighted mean of max(J, 1/J), charts area-normalised; 1 is perfect).
+    #[getter]
+    fn area(&self) -> f64 {
+        self.distortion.area
+    }
+    /// Symmetric Dirichlet energy (1 is perfect).
+    #[getter]
+    fn symmetric_dirichlet(&self) -> f64 {
+        self.distortion.symmetric_dirichlet
+    }
+    /// One dict per chart: faces, flips, overlap, conformal, area, symmetric_dirichlet, area_3d.
+    #[getter]
+    fn per_chart<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
+        let items = self.per_chart.iter().map(|c| chart_metrics_dict(py, c)).collect::<PyResult<Vec<_>>>()?;
+        PyList::new(py, items)
+    }
+    /// All fields as a plain dict.
+    fn as_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        d.set_item("charts", self.charts)?;
+        d.set_item("flips", self.flips)?;
+        d.set_item("overlapping_charts", self.overlapping_charts)?;
+        distortion_items(&d, &self.distortion)?;
+        d.set_item("per_chart", self.per_chart(py)?)?;
+        Ok(d)
+    }
+    fn __repr__(&self) -> String {
+        format!(
+            "Metrics(charts={}, flips={}, overlapping_charts={}, conformal={}, area={}, symmetric_dirichlet={})",
+            self.charts,
+            self.flips,
+            self.overlapping_charts,
+            fmt_f(self.distortion.conformal),
+            fmt_f(self.distortion.area),
+            fmt_f(self.distortion.symmetric_dirichlet)
+        )
+    }
+}

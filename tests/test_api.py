@@ -1,0 +1,755 @@
+"""Tests of the Python API of uvflat: shapes, dtypes, typed errors and analytic cases.
+
+Every expected number here follows from geometry (a planar mesh maps isometrically, a
+stretch by 2 has sigma1/sigma2 = 2, ...), never from a stored snapshot.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import threading
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+import pytest
+
+import uvflat
+from meshio_util import read_mesh
+
+# ---------------------------------------------------------------------------------------------
+# Mesh builders
+
+
+def grid(nx: int, ny: int, *, triangles: bool = False, size: float = 1.0):
+    """Planar grid in z = 0 of nx * ny unit-ish cells (quads, or triangles split along the
+    anti-diagonal so that the cell's corner (i, j) lies in exactly one triangle)."""
+    xs, ys = np.meshgrid(np.arange(nx + 1) * size, np.arange(ny + 1) * size, indexing="xy")
+    positions = np.stack([xs.ravel(), ys.ravel(), np.zeros(xs.size)], axis=1)
+
+    def vid(i, j):
+        return j * (nx + 1) + i
+
+    faces = []
+    for j in range(ny):
+        for i in range(nx):
+            a, b, c, d = vid(i, j), vid(i + 1, j), vid(i + 1, j + 1), vid(i, j + 1)
+            if triangles:
+                faces += [[a, b, d], [b, c, d]]
+            else:
+                faces.append([a, b, c, d])
+    corner_verts = np.array([v for f in faces for v in f], dtype=np.int64)
+    face_sizes = np.array([len(f) for f in faces], dtype=np.int64)
+    return positions, corner_verts, face_sizes
+
+
+def cube():
+    """Closed unit cube of 6 outward-oriented quads."""
+    positions = np.array(
+        [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]],
+        dtype=np.float64,
+    )
+    faces = [
+        [0, 3, 2, 1],  # bottom z=0
+        [4, 5, 6, 7],  # top z=1
+        [0, 1, 5, 4],  # y=0
+        [1, 2, 6, 5],  # x=1
+        [2, 3, 7, 6],  # y=1
+        [3, 0, 4, 7],  # x=0
+    ]
+    corner_verts = np.array([v for f in faces for v in f], dtype=np.int64)
+    face_sizes = np.full(6, 4, dtype=np.int64)
+    return positions, corner_verts, face_sizes
+
+
+# Cutting the cube along a spanning tree of its vertices (three top edges and the four
+# vertical edges) unfolds it into the classic cross: the bottom in the middle, four sides
+# around it and the top hanging off the x=0 side.
+CROSS_SEAMS = np.array([[4, 5], [5, 6], [6, 7], [0, 4], [1, 5], [2, 6], [3, 7]])
+
+
+def corner_faces(face_sizes):
+    return np.repeat(np.arange(len(face_sizes)), face_sizes)
+
+
+def identity_uv(positions, corner_verts):
+    return positions[corner_verts, :2].copy()
+
+
+# ---------------------------------------------------------------------------------------------
+# Module surface
+
+
+def test_methods_and_exports():
+    assert isinstance(uvflat.METHODS, tuple)
+    assert {"tutte", "harmonic", "mean_value", "lscm", "spectral"} <= set(uvflat.METHODS)
+    assert all(isinstance(m, str) for m in uvflat.METHODS)
+    assert isinstance(uvflat.__version__, str)
+    for name in uvflat.__all__:
+        assert hasattr(uvflat, name), name
+
+
+@pytest.mark.parametrize(
+    "cls, parents",
+    [
+        ("InputError", ("UvflatError", "ValueError")),
+        ("MeshError", ("UvflatError", "ValueError")),
+        ("VertexIndexError", ("MeshError", "UvflatError", "ValueError")),
+        ("NonFiniteError", ("MeshError",)),
+        ("FaceSizeError", ("MeshError",)),
+        ("RepeatedVertexError", ("MeshError",)),
+        ("SeamError", ("MeshError",)),
+        ("PinError", ("UvflatError", "ValueError")),
+        ("OptionError", ("UvflatError", "ValueError")),
+        ("UvflatError", ("Exception",)),
+    ],
+)
+def test_exception_hierarchy(cls, parents):
+    builtin = {"ValueError": ValueError, "Exception": Exception}
+    c = getattr(uvflat, cls)
+    for p in parents:
+        assert issubclass(c, builtin[p] if p in builtin else getattr(uvflat, p)), (cls, p)
+    assert c.__module__ == "uvflat"
+    assert c.__doc__
+
+
+def test_panic_in_core_becomes_uvflat_error():
+    from uvflat import _uvflat
+
+    with pytest.raises(uvflat.UvflatError) as ei:
+        _uvflat._internal_panic_check()
+    assert type(ei.value) is uvflat.UvflatError
+    assert "internal error" in str(ei.value) and "deliberate panic" in str(ei.value)
+
+
+def test_pin_and_option_errors_are_not_mesh_errors():
+    assert not issubclass(uvflat.PinError, uvflat.MeshError)
+    assert not issubclass(uvflat.OptionError, uvflat.MeshError)
+    assert not issubclass(uvflat.InputError, uvflat.MeshError)
+
+
+# ---------------------------------------------------------------------------------------------
+# Output shapes, dtypes and reports
+
+
+def test_output_shapes_and_dtypes():
+    pos, cv, fs = grid(4, 3)
+    r = uvflat.unwrap(pos, cv, fs)
+    C, F = len(cv), len(fs)
+    assert isinstance(r, uvflat.UnwrapResult)
+    assert r.uv.shape == (C, 2) and r.uv.dtype == np.float64 and r.uv.flags.c_contiguous
+    assert r.chart.shape == (F,) and r.chart.dtype == np.int32
+    assert r.face_solved.shape == (F,) and r.face_solved.dtype == np.bool_
+    assert isinstance(r.seconds, float) and r.seconds >= 0.0
+    assert r.method == "lscm"
+    assert isinstance(r.charts, list) and len(r.charts) == 1
+    assert np.all(r.chart == 0) and np.all(r.face_solved)
+    assert np.all(np.isfinite(r.uv))
+
+    rep = r.charts[0]
+    assert isinstance(rep, uvflat.ChartReport)
+    int_fields = ["id", "faces", "triangles", "vertices", "boundary_loops", "genus", "iterations", "flips"]
+    float_fields = ["residual", "conformal", "area", "symmetric_dirichlet", "seconds"]
+    for f in int_fields:
+        assert isinstance(getattr(rep, f), int), f
+    for f in float_fields:
+        assert isinstance(getattr(rep, f), float), f
+    assert isinstance(rep.overlap, bool)
+    assert rep.reason is None or isinstance(rep.reason, str)
+    assert (rep.id, rep.method, rep.kind, rep.status) == (0, "lscm", "disk", "solved")
+    assert (rep.faces, rep.triangles, rep.vertices) == (12, 24, 20)
+    assert (rep.boundary_loops, rep.genus) == (1, 0)
+
+    d = rep.as_dict()
+    assert set(d) == set(int_fields + float_fields + ["method", "kind", "status", "reason", "overlap"])
+    assert d["faces"] == 12 and d["status"] == "solved"
+    assert "ChartReport(" in repr(rep) and "solved" in repr(rep)
+
+    rd = r.as_dict()
+    assert {"uv", "chart", "face_solved", "charts", "seconds"} <= set(rd)
+    assert isinstance(rd["charts"][0], dict)
+    assert "UnwrapResult(" in repr(r)
+
+
+def test_results_are_immutable():
+    pos, cv, fs = grid(2, 2)
+    r = uvflat.unwrap(pos, cv, fs)
+    with pytest.raises(AttributeError):
+        r.seconds = 1.0
+    with pytest.raises(AttributeError):
+        r.charts[0].flips = 3
+
+
+@pytest.mark.parametrize("idx_dtype", [np.int32, np.int64, np.uint32, np.uint16, np.int16, np.uint64])
+@pytest.mark.parametrize("pos_dtype", [np.float32, np.float64, np.int64])
+def test_input_dtypes_accepted(idx_dtype, pos_dtype):
+    pos, cv, fs = grid(3, 2)
+    ref = uvflat.unwrap(pos, cv, fs)
+    r = uvflat.unwrap(pos.astype(pos_dtype), cv.astype(idx_dtype), fs.astype(idx_dtype))
+    # Grid coordinates are small integers, exact in every dtype: same input, same output.
+    np.testing.assert_array_equal(r.uv, ref.uv)
+    np.testing.assert_array_equal(r.chart, ref.chart)
+
+
+def test_python_lists_and_non_contiguous_arrays_accepted():
+    pos, cv, fs = grid(3, 2)
+    ref = uvflat.unwrap(pos, cv, fs)
+    r = uvflat.unwrap(pos.tolist(), cv.tolist(), fs.tolist())
+    np.testing.assert_array_equal(r.uv, ref.uv)
+    # Fortran-ordered positions and a strided index view.
+    wide = np.zeros((len(cv), 2), dtype=np.int64)
+    wide[:, 0] = cv
+    r2 = uvflat.unwrap(np.asfortranarray(pos), wide[:, 0], fs)
+    np.testing.assert_array_equal(r2.uv, ref.uv)
+
+
+def test_empty_optional_arrays():
+    pos, cv, fs = grid(2, 2)
+    ref = uvflat.unwrap(pos, cv, fs)
+    r = uvflat.unwrap(pos, cv, fs, seams=[], pins=[], pin_uvs=[], selected=None, fit_to=None)
+    np.testing.assert_array_equal(r.uv, ref.uv)
+    r = uvflat.unwrap(pos, cv, fs, seams=np.zeros((0, 2), np.int32))
+    np.testing.assert_array_equal(r.uv, ref.uv)
+
+
+def test_empty_and_degenerate_meshes_do_not_crash():
+    r = uvflat.unwrap(np.zeros((0, 3)), [], [])
+    assert r.uv.shape == (0, 2) and r.chart.shape == (0,) and r.face_solved.shape == (0,)
+    assert r.charts == []
+    m = uvflat.metrics(np.zeros((0, 3)), [], [], np.zeros((0, 2)))
+    assert m.charts == 0 and m.flips == 0 and m.per_chart == []
+    # A zero-area triangle: any outcome but a crash or an internal error.
+    try:
+        r = uvflat.unwrap(np.zeros((3, 3)), [0, 1, 2], [3])
+    except uvflat.UvflatError as e:
+        assert not str(e).startswith("internal error")
+    else:
+        assert r.uv.shape == (3, 2)
+
+
+# ---------------------------------------------------------------------------------------------
+# Typed errors naming the element
+
+
+def test_vertex_index_out_of_range():
+    pos, cv, fs = grid(2, 1)  # faces 0 and 1, 4 corners each, 6 vertices
+    cv = cv.copy()
+    cv[5] = 99  # face 1, corner 5
+    with pytest.raises(uvflat.VertexIndexError) as ei:
+        uvflat.unwrap(pos, cv, fs)
+    e = ei.value
+    assert (e.face, e.corner, e.vertex) == (1, 5, 99)
+    assert e.n_vertices == 6
+    assert "face 1" in str(e) and "99" in str(e)
+    assert isinstance(e, uvflat.MeshError) and isinstance(e, ValueError)
+
+
+def test_vertex_index_negative():
+    pos, cv, fs = grid(2, 1)
+    cv = cv.copy()
+    cv[6] = -3
+    with pytest.raises(uvflat.VertexIndexError) as ei:
+        uvflat.unwrap(pos, cv, fs)
+    assert (ei.value.face, ei.value.corner, ei.value.vertex) == (1, 6, -3)
+    assert "face 1" in str(ei.value)
+
+
+def test_vertex_index_too_large_for_uint32():
+    pos, cv, fs = grid(1, 1)
+    cv = cv.copy()
+    cv[2] = 2**40
+    with pytest.raises(uvflat.VertexIndexError) as ei:
+        uvflat.unwrap(pos, cv, fs)
+    assert (ei.value.face, ei.value.vertex) == (0, 2**40)
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
+def test_non_finite_position(bad):
+    pos, cv, fs = grid(2, 2)
+    pos = pos.copy()
+    pos[4, 1] = bad
+    with pytest.raises(uvflat.NonFiniteError) as ei:
+        uvflat.unwrap(pos, cv, fs)
+    assert ei.value.vertex == 4
+    assert "vertex 4" in str(ei.value)
+
+
+def test_face_too_small():
+    pos = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], float)
+    cv = np.array([0, 1, 2, 1, 3])
+    fs = np.array([3, 2])
+    with pytest.raises(uvflat.FaceSizeError) as ei:
+        uvflat.unwrap(pos, cv, fs)
+    assert (ei.value.face, ei.value.size) == (1, 2)
+    assert "face 1" in str(ei.value)
+
+
+def test_face_size_negative():
+    pos, cv, fs = grid(2, 1)
+    fs = fs.copy()
+    fs[1] = -4
+    with pytest.raises(uvflat.FaceSizeError) as ei:
+        uvflat.unwrap(pos, cv, fs)
+    assert (ei.value.face, ei.value.size) == (1, -4)
+
+
+def test_repeated_vertex():
+    pos = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], float)
+    cv = np.array([0, 1, 2, 1, 3, 3])
+    fs = np.array([3, 3])
+    with pytest.raises(uvflat.RepeatedVertexError) as ei:
+        uvflat.unwrap(pos, cv, fs)
+    assert (ei.value.face, ei.value.vertex) == (1, 3)
+    assert "face 1" in str(ei.value)
+
+
+@pytest.mark.parametrize("bad", [50, -1])
+def test_bad_seam(bad):
+    pos, cv, fs = grid(2, 2)
+    seams = np.array([[0, 1], [1, 2], [4, bad]])
+    with pytest.raises(uvflat.SeamError) as ei:
+        uvflat.unwrap(pos, cv, fs, seams=seams)
+    assert (ei.value.seam, ei.value.vertex) == (2, bad)
+    assert ei.value.n_vertices == 9
+    assert "seam 2" in str(ei.value)
+
+
+@pytest.mark.parametrize("bad", [1000, -2])
+def test_bad_pin_corner(bad):
+    pos, cv, fs = grid(2, 2)
+    with pytest.raises(uvflat.PinError) as ei:
+        uvflat.unwrap(pos, cv, fs, pins=[0, bad], pin_uvs=[[0, 0], [1, 1]])
+    assert (ei.value.pin, ei.value.corner) == (1, bad)
+    assert ei.value.n_corners == len(cv)
+    assert "pin 1" in str(ei.value)
+
+
+def test_nan_pin_uv():
+    pos, cv, fs = grid(2, 2)
+    with pytest.raises(uvflat.PinError) as ei:
+        uvflat.unwrap(pos, cv, fs, pins=[0, 5], pin_uvs=[[0, 0], [np.nan, 1]])
+    assert (ei.value.pin, ei.value.corner) == (1, 5)
+
+
+def test_nan_fit_to():
+    pos, cv, fs = grid(2, 2)
+    prev = identity_uv(pos, cv)
+    prev[7, 0] = np.nan
+    with pytest.raises(uvflat.InputError) as ei:
+        uvflat.unwrap(pos, cv, fs, fit_to=prev)
+    assert ei.value.corner == 7 and ei.value.argument == "fit_to"
+
+
+@pytest.mark.parametrize(
+    "argument, mutate",
+    [
+        ("positions", lambda a: a.update(positions=a["positions"][:, :2])),
+        ("positions", lambda a: a.update(positions=a["positions"].ravel())),
+        ("positions", lambda a: a.update(positions=a["positions"].astype(complex))),
+        ("positions", lambda a: a.update(positions=[[0, 0, 0], [1, 0]])),
+        ("corner_verts", lambda a: a.update(corner_verts=a["corner_verts"].reshape(-1, 4))),
+        ("corner_verts", lambda a: a.update(corner_verts=a["corner_verts"].astype(float))),
+        ("corner_verts", lambda a: a.update(corner_verts=["a", "b"])),
+        ("face_sizes", lambda a: a.update(face_sizes=a["face_sizes"].astype(np.float32))),
+        ("face_sizes", lambda a: a.update(face_sizes=a["face_sizes"][:, None])),
+        ("seams", lambda a: a.update(seams=np.array([[0, 1, 2]]))),
+        ("seams", lambda a: a.update(seams=np.array([0.0, 1.0]))),
+        ("selected", lambda a: a.update(selected=np.ones((2, 2), bool))),
+        ("selected", lambda a: a.update(selected=np.array([0.5, 1.0, 1.0, 1.0]))),
+        ("pin_uvs", lambda a: a.update(pins=[0, 1], pin_uvs=[[0, 0, 0], [1, 1, 1]])),
+        ("pin_uvs", lambda a: a.update(pins=[0, 1], pin_uvs=[[0, 0]])),
+        ("pin_uvs", lambda a: a.update(pins=[0, 1])),
+        ("pins", lambda a: a.update(pin_uvs=[[0, 0]])),
+        ("fit_to", lambda a: a.update(fit_to=np.zeros((3, 2)))),
+        ("fit_to", lambda a: a.update(fit_to=np.zeros((16, 3)))),
+    ],
+)
+def test_wrong_shapes_raise_input_error(argument, mutate):
+    pos, cv, fs = grid(2, 2)
+    args = dict(positions=pos, corner_verts=cv, face_sizes=fs)
+    mutate(args)
+    positional = [args.pop(k) for k in ("positions", "corner_verts", "face_sizes")]
+    with pytest.raises(uvflat.InputError) as ei:
+        uvflat.unwrap(*positional, **args)
+    assert ei.value.argument == argument
+    assert argument in str(ei.value)
+
+
+def test_shape_error_reports_shape_received():
+    pos, cv, fs = grid(2, 2)
+    with pytest.raises(uvflat.InputError) as ei:
+        uvflat.unwrap(pos[:, :2], cv, fs)
+    assert ei.value.shape == (9, 2)
+    assert "(9, 2)" in str(ei.value) and "(V, 3)" in str(ei.value)
+
+
+def test_length_mismatches_raise_input_error():
+    pos, cv, fs = grid(2, 2)
+    # face_sizes do not add up to the number of corners.
+    with pytest.raises(uvflat.InputError):
+        uvflat.unwrap(pos, cv[:-1], fs)
+    # selected has the wrong number of faces.
+    with pytest.raises(uvflat.InputError) as ei:
+        uvflat.unwrap(pos, cv, fs, selected=[True, False])
+    assert "selected" in str(ei.value)
+
+
+def test_unknown_method_and_options():
+    pos, cv, fs = grid(2, 2)
+    with pytest.raises(uvflat.OptionError) as ei:
+        uvflat.unwrap(pos, cv, fs, method="no_such_method")
+    assert "no_such_method" in str(ei.value)
+    with pytest.raises(uvflat.OptionError) as ei:
+        uvflat.unwrap(pos, cv, fs, method="lscm", boundary="circle")
+    assert "boundary" in str(ei.value)
+    with pytest.raises(uvflat.OptionError) as ei:
+        uvflat.unwrap(pos, cv, fs, method="tutte", boundary="hexagon")
+    assert ei.value.option == "boundary"
+    with pytest.raises(uvflat.OptionError) as ei:
+        uvflat.unwrap(pos, cv, fs, method="spectral", max_iterations=[1, 2])
+    assert ei.value.option == "max_iterations"
+    with pytest.raises(uvflat.OptionError) as ei:
+        uvflat.unwrap(pos, cv, fs, method="spectral", max_iterations=2**70)
+    assert ei.value.option == "max_iterations"
+    with pytest.raises(uvflat.OptionError) as ei:
+        uvflat.unwrap(pos, cv, fs, method="spectral", tolerance=-1.0)
+    assert ei.value.option == "tolerance"
+    with pytest.raises(uvflat.OptionError) as ei:
+        uvflat.unwrap(pos, cv, fs, method="tutte", boundary=None)
+    assert ei.value.option == "boundary"
+    with pytest.raises(uvflat.OptionError):
+        uvflat.unwrap(pos, cv, fs, method="tutte", frobnicate=True)
+
+
+def test_valid_options_accepted():
+    pos, cv, fs = grid(3, 3)
+    for shape in ("circle", "square"):
+        r = uvflat.unwrap(pos, cv, fs, method="tutte", boundary=shape)
+        assert r.charts[0].status == "solved" and r.charts[0].flips == 0
+    r = uvflat.unwrap(pos, cv, fs, method="spectral", max_iterations=np.int64(300), tolerance=1e-9)
+    assert r.charts[0].status in ("solved", "fallback")
+
+
+# ---------------------------------------------------------------------------------------------
+# Analytic unwraps
+
+
+@pytest.mark.parametrize("triangles", [False, True])
+def test_planar_grid_lscm_is_conformal(triangles):
+    pos, cv, fs = grid(6, 4, triangles=triangles, size=0.5)
+    r = uvflat.unwrap(pos, cv, fs, method="lscm")
+    (rep,) = r.charts
+    assert rep.status == "solved" and rep.kind == "disk"
+    assert rep.flips == 0 and not rep.overlap
+    assert abs(rep.conformal - 1.0) < 1e-9
+    assert abs(rep.area - 1.0) < 1e-9
+    assert abs(rep.symmetric_dirichlet - 1.0) < 1e-9
+    # The independent metric agrees.
+    m = uvflat.metrics(pos, cv, fs, r.uv)
+    assert m.charts == 1 and m.flips == 0 and m.overlapping_charts == 0
+    assert abs(m.conformal - 1.0) < 1e-9
+    # Default fit: UV area equals 3D area (an isometry up to rotation/translation).
+    d3 = np.linalg.norm(pos[cv[0]] - pos[cv[2]])
+    duv = np.linalg.norm(r.uv[0] - r.uv[2])
+    assert abs(d3 - duv) < 1e-9
+
+
+@pytest.mark.parametrize("method", ["tutte", "harmonic", "mean_value", "lscm", "spectral"])
+def test_every_method_maps_a_disk_without_flips(method):
+    pos, cv, fs = grid(5, 5, triangles=True)
+    r = uvflat.unwrap(pos, cv, fs, method=method)
+    (rep,) = r.charts
+    assert rep.status in ("solved", "fallback"), rep.reason
+    assert rep.flips == 0
+    assert np.all(np.isfinite(r.uv))
+    assert np.all(r.face_solved)
+
+
+def test_selected_mask():
+    pos, cv, fs = grid(4, 2)
+    F = len(fs)
+    selected = np.zeros(F, dtype=bool)
+    selected[:4] = True  # bottom row of cells
+    r = uvflat.unwrap(pos, cv, fs, selected=selected)
+    assert np.all(r.chart[~selected] == -1)
+    assert np.all(r.chart[selected] >= 0)
+    assert not r.face_solved[~selected].any()
+    assert r.face_solved[selected].all()
+    unselected_corners = ~selected[corner_faces(fs)]
+    np.testing.assert_array_equal(r.uv[unselected_corners], 0.0)
+    assert len(r.charts) == 1 and r.charts[0].faces == 4
+    # Integer masks behave like bool masks.
+    r2 = uvflat.unwrap(pos, cv, fs, selected=selected.astype(np.int8))
+    np.testing.assert_array_equal(r2.chart, r.chart)
+
+
+def test_selection_splits_into_charts():
+    pos, cv, fs = grid(5, 1)
+    selected = np.array([True, True, False, True, True])
+    r = uvflat.unwrap(pos, cv, fs, selected=selected)
+    assert len(r.charts) == 2
+    assert r.chart.tolist()[2] == -1
+    assert r.chart[0] == r.chart[1] != r.chart[3] == r.chart[4]
+    assert sorted(c.faces for c in r.charts) == [2, 2]
+
+
+def test_closed_cube_fails_and_says_why():
+    pos, cv, fs = cube()
+    r = uvflat.unwrap(pos, cv, fs)
+    (rep,) = r.charts
+    assert rep.kind == "closed" and rep.status == "failed"
+    assert rep.genus == 0 and rep.boundary_loops == 0
+    assert rep.reason is not None and "seam" in rep.reason.lower()
+    assert not r.face_solved.any()
+    assert np.all(r.chart == 0)
+    np.testing.assert_array_equal(r.uv, 0.0)
+
+
+def test_cube_cut_into_a_cross_solves():
+    pos, cv, fs = cube()
+    r = uvflat.unwrap(pos, cv, fs, seams=CROSS_SEAMS)
+    (rep,) = r.charts
+    assert rep.kind == "disk" and rep.status == "solved", rep.reason
+    assert rep.boundary_loops == 1 and rep.faces == 6
+    assert r.face_solved.all()
+    assert rep.flips == 0
+    # Every cone vertex lies on the cut, so the cut cube is developable: LSCM unfolds it
+    # isometrically (up to similarity).
+    assert abs(rep.conformal - 1.0) < 1e-9
+    m = uvflat.metrics(pos, cv, fs, r.uv)
+    assert m.charts == 1 and m.flips == 0
+    assert abs(m.conformal - 1.0) < 1e-9
+    # Unfolded cross: total UV area equals the 3D area (6) and every face is a unit square.
+    for f in range(6):
+        quad = r.uv[4 * f: 4 * f + 4]
+        edges = np.roll(quad, -1, axis=0) - quad
+        np.testing.assert_allclose(np.linalg.norm(edges, axis=1), 1.0, atol=1e-9)
+
+
+def test_seams_in_either_order_are_the_same():
+    pos, cv, fs = cube()
+    a = uvflat.unwrap(pos, cv, fs, seams=CROSS_SEAMS)
+    b = uvflat.unwrap(pos, cv, fs, seams=CROSS_SEAMS[:, ::-1].astype(np.uint32))
+    np.testing.assert_allclose(a.uv, b.uv, atol=1e-12)
+
+
+def test_lscm_pins_are_exact():
+    pos, cv, fs = grid(4, 3, triangles=True)
+    # Pin one corner of vertex 0 = (0, 0) and one corner of vertex 4 = (4, 0).
+    c0 = int(np.flatnonzero(cv == 0)[0])
+    c4 = int(np.flatnonzero(cv == 4)[0])
+    pin_uvs = np.array([[0.25, -1.0], [8.25, -1.0]])
+    r = uvflat.unwrap(pos, cv, fs, method="lscm", pins=[c0, c4], pin_uvs=pin_uvs)
+    assert r.charts[0].status == "solved"
+    np.testing.assert_array_equal(r.uv[cv == 0], np.broadcast_to(pin_uvs[0], (np.sum(cv == 0), 2)))
+    np.testing.assert_array_equal(r.uv[cv == 4], np.broadcast_to(pin_uvs[1], (np.sum(cv == 4), 2)))
+    # A planar mesh pinned at two points is mapped by the similarity through them:
+    # here uv = 2 * (x, y) + (0.25, -1).
+    expected = 2.0 * pos[cv, :2] + np.array([0.25, -1.0])
+    np.testing.assert_allclose(r.uv, expected, atol=1e-9)
+
+
+def test_pins_accept_int32_and_float32():
+    pos, cv, fs = grid(2, 2)
+    c0 = int(np.flatnonzero(cv == 0)[0])
+    c8 = int(np.flatnonzero(cv == 8)[0])
+    r = uvflat.unwrap(pos, cv, fs, pins=np.array([c0, c8], np.int32),
+                      pin_uvs=np.array([[0, 0], [1, 1]], np.float32))
+    np.testing.assert_array_equal(r.uv[c0], [0.0, 0.0])
+    np.testing.assert_array_equal(r.uv[c8], [1.0, 1.0])
+
+
+def test_fit_to_previous_uvs():
+    pos, cv, fs = grid(3, 2)
+    # Previous UVs: the mesh rotated by 90 degrees, scaled by 3 and moved.
+    rot = np.array([[0.0, -1.0], [1.0, 0.0]])
+    prev = 3.0 * pos[cv, :2] @ rot.T + np.array([10.0, 5.0])
+    r = uvflat.unwrap(pos, cv, fs, fit_to=prev)
+    np.testing.assert_allclose(r.uv, prev, atol=1e-9)
+
+
+# ---------------------------------------------------------------------------------------------
+# metrics on known maps
+
+
+def tilted(positions):
+    """Rigidly rotate positions out of the z = 0 plane (rotations keep every metric)."""
+    a, b = 0.3, -0.7
+    rx = np.array([[1, 0, 0], [0, math.cos(a), -math.sin(a)], [0, math.sin(a), math.cos(a)]])
+    rz = np.array([[math.cos(b), -math.sin(b), 0], [math.sin(b), math.cos(b), 0], [0, 0, 1]])
+    return positions @ (rz @ rx).T + np.array([1.0, 2.0, 3.0])
+
+
+def test_metrics_identity_map():
+    pos, cv, fs = grid(4, 4, triangles=True)
+    uv = identity_uv(pos, cv)
+    m = uvflat.metrics(tilted(pos), cv, fs, uv)
+    assert isinstance(m, uvflat.Metrics)
+    assert (m.charts, m.flips, m.overlapping_charts) == (1, 0, 0)
+    for value in (m.conformal, m.area, m.symmetric_dirichlet):
+        assert abs(value - 1.0) < 1e-9
+    (pc,) = m.per_chart
+    assert pc["faces"] == len(fs) and pc["flips"] == 0 and pc["overlap"] is False
+    assert abs(pc["area_3d"] - 16.0) < 1e-9
+    assert abs(pc["conformal"] - 1.0) < 1e-9
+    d = m.as_dict()
+    assert {"charts", "flips", "overlapping_charts", "conformal", "area", "symmetric_dirichlet", "per_chart"} <= set(d)
+    assert "Metrics(" in repr(m)
+
+
+def test_metrics_counts_one_flipped_triangle():
+    pos, cv, fs = grid(3, 3, triangles=True)
+    uv = identity_uv(pos, cv)
+    # Vertex 0 (the grid corner) lies in exactly one triangle (0, 1, 4). Moving its UV across
+    # the edge (1, 4) flips that triangle and no other; the island stays one piece.
+    assert np.sum(cv == 0) == 1
+    uv[cv == 0] = [0.6, 0.6]
+    m = uvflat.metrics(pos, cv, fs, uv)
+    assert m.charts == 1
+    assert m.flips == 1
+
+
+def test_metrics_stretch_by_two():
+    pos, cv, fs = grid(3, 2, triangles=True)
+    uv = identity_uv(pos, cv)
+    uv[:, 0] *= 2.0
+    m = uvflat.metrics(tilted(pos), cv, fs, uv)
+    # J = diag(2, 1): sigma1 / sigma2 = 2. After area normalisation sigma = (sqrt2, 1/sqrt2),
+    # so the area distortion is 1 and the symmetric Dirichlet energy (2 + 1/2 + 1/2 + 2) / 4.
+    assert abs(m.conformal - 2.0) < 1e-9
+    assert abs(m.area - 1.0) < 1e-9
+    assert abs(m.symmetric_dirichlet - 1.25) < 1e-9
+    assert m.flips == 0
+
+
+def test_metrics_islands_follow_uv_equality():
+    pos, cv, fs = grid(2, 1)  # two quads sharing the edge (1, 4)
+    uv = identity_uv(pos, cv).astype(np.float32)
+    assert uvflat.metrics(pos, cv, fs, uv).charts == 1
+    uv[4:] += 5.0  # move the second face away: two islands
+    m = uvflat.metrics(pos, cv, fs, uv)
+    assert m.charts == 2 and len(m.per_chart) == 2
+    assert abs(m.conformal - 1.0) < 1e-6
+
+
+def test_metrics_selected_and_errors():
+    pos, cv, fs = grid(2, 1)
+    uv = identity_uv(pos, cv)
+    uv[4:] += 5.0
+    m = uvflat.metrics(pos, cv, fs, uv, selected=[True, False])
+    assert m.charts == 1
+    with pytest.raises(uvflat.InputError) as ei:
+        uvflat.metrics(pos, cv, fs, uv[:, :1])
+    assert ei.value.argument == "uv"
+    bad = uv.copy()
+    bad[3, 1] = np.inf
+    with pytest.raises(uvflat.InputError) as ei:
+        uvflat.metrics(pos, cv, fs, bad)
+    assert ei.value.corner == 3
+    with pytest.raises(uvflat.VertexIndexError):
+        uvflat.metrics(pos, np.where(cv == 4, 17, cv), fs, uv)
+
+
+# ---------------------------------------------------------------------------------------------
+# Threads: the core runs without the GIL
+
+
+def test_unwraps_in_threads():
+    pos, cv, fs = grid(60, 50, triangles=True)  # 6,000 triangles
+    barrier = threading.Barrier(2)
+
+    def job(scale):
+        barrier.wait()
+        return uvflat.unwrap(pos * scale, cv, fs, method="lscm")
+
+    with ThreadPoolExecutor(max_workers=2) as ex:
+        results = list(ex.map(job, [1.0, 2.0]))
+    for r in results:
+        (rep,) = r.charts
+        assert rep.status == "solved" and rep.flips == 0
+        assert abs(rep.conformal - 1.0) < 1e-9
+        assert r.uv.shape == (len(cv), 2)
+    # Same mesh at twice the size: UV edge lengths scale by 2 (area-scaled fit).
+    e1 = np.linalg.norm(results[0].uv[1] - results[0].uv[0])
+    e2 = np.linalg.norm(results[1].uv[1] - results[1].uv[0])
+    assert abs(e2 - 2.0 * e1) < 1e-9
+
+
+def test_gil_released_while_core_runs():
+    """Another Python thread runs while this thread is inside the core.
+
+    With a huge switch interval the interpreter never forces a thread switch, so the waiting
+    thread can only run if the caller gives the GIL up voluntarily: inside ``unwrap`` that is
+    the core call. Inputs are already float64/int64 and contiguous, so numpy makes no copies
+    (which could also release the GIL).
+    """
+    pos, cv, fs = grid(200, 150, triangles=True)  # 60,000 triangles
+    pos = np.ascontiguousarray(pos, dtype=np.float64)
+    cv = np.ascontiguousarray(cv, dtype=np.int64)
+    fs = np.ascontiguousarray(fs, dtype=np.int64)
+    go = threading.Event()
+    ran = []
+
+    def other():
+        go.wait()
+        ran.append(True)
+
+    old = sys.getswitchinterval()
+    t = threading.Thread(target=other)
+    t.start()
+    try:
+        sys.setswitchinterval(100.0)
+        go.set()
+        r = uvflat.unwrap(pos, cv, fs, method="harmonic")
+        ran_during_unwrap = bool(ran)
+    finally:
+        sys.setswitchinterval(old)
+        t.join()
+    assert ran_during_unwrap, "no other Python thread ran during unwrap: the GIL was held"
+    # A harmonic map of a disk onto a convex polygon never flips (Tutte, Floater).
+    assert r.charts[0].status == "solved" and r.charts[0].flips == 0
+
+
+# ---------------------------------------------------------------------------------------------
+# Real meshes (../shared/meshes), skipped when the folder is absent
+
+
+def test_real_alligator_near_developable():
+    pos, cv, fs = read_mesh("alligator.obj")
+    r = uvflat.unwrap(pos, cv, fs, method="lscm")
+    assert len(r.charts) == 1
+    (rep,) = r.charts
+    assert rep.kind == "disk" and rep.status == "solved"
+    assert np.all(np.isfinite(r.uv))
+    m = uvflat.metrics(pos, cv, fs, r.uv)
+    assert m.charts == 1
+    assert abs(m.conformal - rep.conformal) < 1e-9
+
+
+def test_real_halftunnel_quads_with_holes():
+    pos, cv, fs = read_mesh("halftunnel.off")
+    r = uvflat.unwrap(pos, cv, fs, method="lscm")
+    assert r.face_solved.all()
+    assert all(c.status != "failed" for c in r.charts)
+    assert sum(c.faces for c in r.charts) == len(fs)
+
+
+def test_real_closed_bunny_reports_failure_not_error():
+    pos, cv, fs = read_mesh("bunny.off")
+    r = uvflat.unwrap(pos, cv, fs)
+    assert sum(c.faces for c in r.charts) == len(fs)
+    for c in r.charts:
+        if c.status == "failed":
+            assert c.reason
+
+
+@pytest.mark.parametrize("name", ["beetle-nonmanifold.obj", "cube_40k.obj"])
+def test_real_bad_input_never_crashes(name):
+    pos, cv, fs = read_mesh(name)
+    try:
+        r = uvflat.unwrap(pos, cv, fs)
+    except uvflat.UvflatError as e:
+        assert not str(e).startswith("internal error"), str(e)
+    else:
+        assert r.uv.shape == (len(cv), 2)
+        assert np.all(np.isfinite(r.uv))
