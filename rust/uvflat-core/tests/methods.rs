@@ -115,7 +115,12 @@ fn rigid_motions_of_the_input_do_not_change_the_map() {
         let gap = similarity_gap(&r2.uv, &r1.uv);
         assert!(gap < 1e-7, "{m:?}: gap {gap}");
         let (d1, d2) = (r1.charts[0].distortion, r2.charts[0].distortion);
-        assert!((d1.conformal - d2.conformal).abs() < 1e-8, "{m:?}");
+        // A square boundary can make a triangle with three vertices on one side degenerate
+        // (infinite distortion); then it must be so on both.
+        assert!(
+            (d1.conformal - d2.conformal).abs() < 1e-8 || (d1.conformal.is_infinite() && d2.conformal.is_infinite()),
+            "{m:?}: {d1:?} vs {d2:?}"
+        );
     }
 }
 

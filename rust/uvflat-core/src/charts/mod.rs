@@ -12,7 +12,7 @@
 
 mod triangulate;
 
-pub use triangulate::triangulate_polygon;
+pub use triangulate::{triangulate_polygon, triangulate_polygon_avoiding};
 
 use std::collections::{HashMap, HashSet};
 
@@ -239,12 +239,15 @@ fn make_chart(mesh: &PolyMesh<'_>, faces: Vec<u32>, corner_root: &[u32], joined:
     let mut triangle_face = Vec::new();
     // Boundary half-edges (chart vertex a → b): polygon edges not joined to another face.
     let mut boundary_edges: Vec<(u32, u32)> = Vec::new();
-    let mut poly_pts: Vec<[f64; 3]> = Vec::new();
-    let mut poly_local: Vec<u32> = Vec::new();
+    // First pass: chart vertices of every corner, and the chart's polygon edges.
+    let mut edges: HashSet<u64> = HashSet::new();
+    let ukey = |a: u32, b: u32| ((a.min(b) as u64) << 32) | a.max(b) as u64;
+    let mut face_local: Vec<u32> = Vec::new();
+    let has_ngon = faces.iter().any(|&f| mesh.face_corners(f as usize).len() > 3);
     for &f in &faces {
-        poly_pts.clear();
-        poly_local.clear();
-        for c in mesh.face_corners(f as usize) {
+        let r = mesh.face_corners(f as usize);
+        let first = face_local.len();
+        for c in r.clone() {
             let v = mesh.corner_vert(c);
             let id = *local_of_root.entry(corner_root[c]).or_insert_with(|| {
                 mesh_vertex.push(v);
@@ -252,18 +255,43 @@ fn make_chart(mesh: &PolyMesh<'_>, faces: Vec<u32>, corner_root: &[u32], joined:
                 (mesh_vertex.len() - 1) as u32
             });
             corner_vertex.push((c as u32, id));
-            poly_pts.push(positions_in[v as usize]);
-            poly_local.push(id);
+            face_local.push(id);
         }
-        let start = mesh.face_corners(f as usize).start;
-        let m = poly_local.len();
+        let m = face_local.len() - first;
         for i in 0..m {
-            if !joined[start + i] {
-                boundary_edges.push((poly_local[i], poly_local[(i + 1) % m]));
+            let (a, b) = (face_local[first + i], face_local[first + (i + 1) % m]);
+            if has_ngon {
+                edges.insert(ukey(a, b));
+            }
+            if !joined[r.start + i] {
+                boundary_edges.push((a, b));
             }
         }
-        for t in triangulate_polygon(&poly_pts) {
-            triangles.push([poly_local[t[0]], poly_local[t[1]], poly_local[t[2]]]);
+    }
+    // Second pass: triangulate, keeping diagonals off edges that exist already.
+    let mut poly_pts: Vec<[f64; 3]> = Vec::new();
+    let mut offset = 0usize;
+    for &f in &faces {
+        let r = mesh.face_corners(f as usize);
+        let m = r.len();
+        let local = &face_local[offset..offset + m];
+        offset += m;
+        if m == 3 {
+            triangles.push([local[0], local[1], local[2]]);
+            triangle_face.push(f);
+            continue;
+        }
+        poly_pts.clear();
+        poly_pts.extend(r.map(|c| positions_in[mesh.corner_vert(c) as usize]));
+        let tris = triangulate_polygon_avoiding(&poly_pts, |i, j| edges.contains(&ukey(local[i], local[j])));
+        for t in tris {
+            for k in 0..3 {
+                let (i, j) = (t[k], t[(k + 1) % 3]);
+                if (i + 1) % m != j && (j + 1) % m != i {
+                    edges.insert(ukey(local[i], local[j]));
+                }
+            }
+            triangles.push([local[t[0]], local[t[1]], local[t[2]]]);
             triangle_face.push(f);
         }
     }

@@ -11,6 +11,14 @@ use crate::geometry::{cross, dot, norm};
 /// Degenerate or self-intersecting input never fails: when no valid ear exists the rest is
 /// fanned, so the result always has exactly `n - 2` triangles covering every corner.
 pub fn triangulate_polygon(pts: &[[f64; 3]]) -> Vec<[usize; 3]> {
+    triangulate_polygon_avoiding(pts, |_, _| false)
+}
+
+/// [`triangulate_polygon`], preferring ears whose new diagonal `(i, j)` (corner positions) is
+/// not `taken`: a diagonal that already exists as an edge elsewhere would make two triangles
+/// share a directed edge (two quads around a valence-2 vertex split along the same diagonal).
+/// A taken diagonal is used only when no other valid ear exists.
+pub fn triangulate_polygon_avoiding(pts: &[[f64; 3]], mut taken: impl FnMut(usize, usize) -> bool) -> Vec<[usize; 3]> {
     let n = pts.len();
     if n < 3 {
         return Vec::new();
@@ -39,6 +47,32 @@ pub fn triangulate_polygon(pts: &[[f64; 3]]) -> Vec<[usize; 3]> {
         return (1..n - 1).map(|i| [0, i, i + 1]).collect();
     };
 
+    if n == 4 {
+        // Quads: pick the diagonal whose two triangles have the larger minimum angle (both
+        // must be positively oriented), so a corner of ~180° never ends up in a sliver.
+        let area2 = |a: usize, b: usize, c: usize| {
+            let (pa, pb, pc) = (p2[a], p2[b], p2[c]);
+            (pb[0] - pa[0]) * (pc[1] - pa[1]) - (pb[1] - pa[1]) * (pc[0] - pa[0])
+        };
+        let mut best: Option<(f64, [[usize; 3]; 2])> = None;
+        for (d0, d1) in [(0usize, 2usize), (1, 3)] {
+            let tris = if d0 == 0 { [[0, 1, 2], [0, 2, 3]] } else { [[0, 1, 3], [1, 2, 3]] };
+            if tris.iter().any(|t| area2(t[0], t[1], t[2]) <= 0.0) {
+                continue;
+            }
+            let q = tris
+                .iter()
+                .map(|t| min_angle_2d(p2[t[0]], p2[t[1]], p2[t[2]]))
+                .fold(f64::INFINITY, f64::min)
+                - if taken(d0, d1) { 10.0 } else { 0.0 };
+            if best.is_none_or(|(bq, _)| q > bq + 1e-9 * bq.abs() + 1e-300) {
+                best = Some((q, tris));
+            }
+        }
+        if let Some((_, tris)) = best {
+            return tris.to_vec();
+        }
+    }
     let mut idx: Vec<usize> = (0..n).collect();
     let mut out = Vec::with_capacity(n - 2);
     while idx.len() > 3 {
@@ -58,10 +92,11 @@ pub fn triangulate_polygon(pts: &[[f64; 3]]) -> Vec<[usize; 3]> {
             if inside {
                 continue;
             }
-            let q = min_angle_2d(pa, pb, pc);
+            // A taken diagonal ranks below every free one.
+            let q = min_angle_2d(pa, pb, pc) - if idx.len() > 3 && taken(a, c) { 10.0 } else { 0.0 };
             // Strictly better by a relative margin: ties (rectangles) resolve the same way
             // under rigid motions and round-off.
-            if best.is_none_or(|(_, bq)| q > bq * (1.0 + 1e-9) + 1e-300) {
+            if best.is_none_or(|(_, bq)| q > bq + 1e-9 * bq.abs() + 1e-300) {
                 best = Some((k, q));
             }
         }
@@ -126,6 +161,15 @@ mod tests {
         let total: f64 = t.iter().map(|&t| area2(&p, t)).sum();
         assert!((total - 6.0).abs() < 1e-12, "twice the L area is 6, got {total}");
         assert!(t.iter().all(|&t| area2(&p, t) > 0.0));
+    }
+
+    #[test]
+    fn a_taken_diagonal_is_avoided() {
+        let p = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+        for (a, b) in [(0, 2), (1, 3)] {
+            let t = triangulate_polygon_avoiding(&p, |i, j| (i.min(j), i.max(j)) == (a, b));
+            assert!(t.iter().all(|tri| !(tri.contains(&a) && tri.contains(&b))), "{t:?}");
+        }
     }
 
     #[test]

@@ -1,0 +1,261 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""The only module of uvflat that touches Blender mesh data.
+
+Everything is read and written in bulk with ``foreach_get`` / ``foreach_set`` on numpy arrays
+whose dtype matches Blender's storage (float32 positions and UVs, int32 indices, bool flags),
+never element by element.  All functions expect the mesh to be out of edit mode (the edit-mode
+BMesh is the live copy there); ``engine.py`` takes care of the mode switches.
+
+Note: Blender re-creates the ``uv_layers`` collection when the mesh leaves or enters edit mode,
+so UV layers are always looked up by name here, never kept across mode switches.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+DEFAULT_UV_NAME = "UVMap"
+
+# Boolean attributes that hold selection state (mesh and UV selection, Blender 4.x and 5.x).
+_SELECTION_PREFIXES = (".select_", ".uv_select_")
+
+
+# ---------------------------------------------------------------------------------------------
+# Reading
+
+
+def _get(collection, attr, count, dtype, width=1):
+    out = np.empty(count * width, dtype=dtype)
+    if count:
+        collection.foreach_get(attr, out)
+    return out if width == 1 else out.reshape(count, width)
+
+
+def read_topology(mesh):
+    """Positions, corners and faces of ``mesh`` as flat arrays.
+
+    Returns ``(positions (V,3) float64, corner_verts (C,) int32, face_sizes (F,) int32)``.
+    """
+    n_v, n_c, n_f = len(mesh.vertices), len(mesh.loops), len(mesh.polygons)
+    positions = _get(mesh.vertices, "co", n_v, np.float32, 3).astype(np.float64)
+    corner_verts = _get(mesh.loops, "vertex_index", n_c, np.int32)
+    face_sizes = _get(mesh.polygons, "loop_total", n_f, np.int32)
+    if n_f:
+        loop_start = _get(mesh.polygons, "loop_start", n_f, np.int32)
+        expected = np.zeros(n_f, dtype=np.int64)
+        np.cumsum(face_sizes[:-1], out=expected[1:])
+        if not np.array_equal(loop_start, expected):
+            # Blender stores face corners contiguously in face order; anything else would make
+            # per-corner arrays ambiguous, so refuse rather than guess.
+            raise RuntimeError(f"mesh '{mesh.name}': face corners are not stored in face order")
+    return positions, corner_verts, face_sizes
+
+
+def read_edges(mesh):
+    """``(edge_verts (E,2) int32, use_seam (E,) bool)``."""
+    n_e = len(mesh.edges)
+    return _get(mesh.edges, "vertices", n_e, np.int32, 2), _get(mesh.edges, "use_seam", n_e, bool)
+
+
+def read_seams(mesh):
+    """Seam edges as ``(S,2)`` int32 vertex pairs."""
+    edge_verts, use_seam = read_edges(mesh)
+    return edge_verts[use_seam]
+
+
+def read_face_selection(mesh, *, include_hidden=False):
+    """Selected faces as an ``(F,)`` bool mask; hidden faces are left out unless asked."""
+    n_f = len(mesh.polygons)
+    selected = _get(mesh.polygons, "select", n_f, bool)
+    if not include_hidden:
+        selected &= ~_get(mesh.polygons, "hide", n_f, bool)
+    return selected
+
+
+def uv_map_names(mesh):
+    return [layer.name for layer in mesh.uv_layers]
+
+
+def active_uv_name(mesh):
+    """Name of the active UV map, or ``None`` if the mesh has none."""
+    layer = mesh.uv_layers.active
+    return None if layer is None else layer.name
+
+
+def read_uv(mesh, name=None):
+    """Per-corner UVs of UV map ``name`` (default: the active one) as ``(C,2)`` float32."""
+    layer = mesh.uv_layers[name] if name is not None else mesh.uv_layers.active
+    if layer is None:
+        raise KeyError(f"mesh '{mesh.name}' has no UV map")
+    return _get(layer.uv, "vector", len(mesh.loops), np.float32, 2)
+
+
+def read_pins(mesh, name=None):
+    """Per-corner pin flags of UV map ``name`` (default: active) as ``(C,)`` bool.
+
+    Blender only stores the pin layer once something was pinned; an absent layer means no pins.
+    """
+    layer = mesh.uv_layers[name] if name is not None else mesh.uv_layers.active
+    n_c = len(mesh.loops)
+    if layer is None or len(layer.pin) != n_c:
+        return np.zeros(n_c, dtype=bool)
+    return _get(layer.pin, "value", n_c, bool)
+
+
+# ---------------------------------------------------------------------------------------------
+# Writing
+
+
+def ensure_uv_map(mesh):
+    """Return ``(name, created)`` of the active UV map, creating one if the mesh has none."""
+    name = active_uv_name(mesh)
+    if name is not None:
+        return name, False
+    layer = mesh.uv_layers.new(name=DEFAULT_UV_NAME, do_init=False)
+    if layer is None:
+        raise RuntimeError(f"mesh '{mesh.name}': could not create a UV map")
+    mesh.uv_layers.active = layer
+    return layer.name, True
+
+
+def remove_uv_map(mesh, name):
+    layer = mesh.uv_layers.get(name)
+    if layer is not None:
+        mesh.uv_layers.remove(layer)
+
+
+def write_uv(mesh, name, uv):
+    """Write ``(C,2)`` UVs into UV map ``name`` (converted to Blender's float32)."""
+    layer = mesh.uv_layers[name]
+    data = np.ascontiguousarray(uv, dtype=np.float32).reshape(-1)
+    if data.size != 2 * len(mesh.loops):
+        raise ValueError(f"mesh '{mesh.name}': {data.size // 2} UVs for {len(mesh.loops)} corners")
+    layer.uv.foreach_set("vector", data)
+    mesh.update()
+
+
+def write_pins(mesh, name, pins):
+    """Set the per-corner pin flags of UV map ``name`` from a ``(C,)`` bool mask."""
+    mesh.uv_layers[name].pin  # noqa: B018 - make sure the layer exists
+    attr_name = f".pn.{name}"
+    attr = mesh.attributes.get(attr_name)
+    if attr is None:
+        attr = mesh.attributes.new(attr_name, "BOOLEAN", "CORNER")
+    attr.data.foreach_set("value", np.ascontiguousarray(pins, dtype=bool))
+    mesh.update()
+
+
+def write_seams(mesh, use_seam):
+    """Set every edge's seam flag from an ``(E,)`` bool mask."""
+    mesh.edges.foreach_set("use_seam", np.ascontiguousarray(use_seam, dtype=bool))
+    mesh.update()
+
+
+# ---------------------------------------------------------------------------------------------
+# Selection state (saved and restored around packing)
+
+
+def save_selection(mesh):
+    """Snapshot of every selection attribute (mesh and UV selection) of ``mesh``."""
+    state = {}
+    for attr in mesh.attributes:
+        if attr.name.startswith(_SELECTION_PREFIXES) and attr.data_type == "BOOLEAN":
+            state[attr.name] = (attr.domain, _get(attr.data, "value", len(attr.data), bool))
+    return state
+
+
+def restore_selection(mesh, state):
+    """Put the selection attributes back exactly as :func:`save_selection` found them."""
+    for attr in list(mesh.attributes):
+        if attr.name.startswith(_SELECTION_PREFIXES) and attr.name not in state:
+            mesh.attributes.remove(mesh.attributes[attr.name])
+    for name, (domain, values) in state.items():
+        _set_bool_attribute(mesh, name, domain, values)
+    mesh.update()
+
+
+def select_faces(mesh, faces):
+    """Select exactly the faces in the ``(F,)`` mask (plus their edges and vertices), in both
+    the mesh selection and, where the mesh stores one, the UV selection."""
+    faces = np.ascontiguousarray(faces, dtype=bool)
+    _, corner_verts, face_sizes = read_topology(mesh)
+    corner_in = np.repeat(faces, face_sizes)
+    verts = np.zeros(len(mesh.vertices), dtype=bool)
+    verts[corner_verts[corner_in]] = True
+    edge_verts, _ = read_edges(mesh)
+    edges = np.zeros(len(mesh.edges), dtype=bool)
+    if len(mesh.loops):
+        corner_edges = _get(mesh.loops, "edge_index", len(mesh.loops), np.int32)
+        edges[corner_edges[corner_in]] = True
+    # Written through the attributes: on a mesh that never had a selection, Blender 5.0.1
+    # crashes in ``edges.foreach_set("select", ...)`` (the attribute does not exist yet).
+    _set_bool_attribute(mesh, ".select_vert", "POINT", verts)
+    _set_bool_attribute(mesh, ".select_edge", "EDGE", edges)
+    _set_bool_attribute(mesh, ".select_poly", "FACE", faces)
+    for name, values in ((".uv_select_face", faces), (".uv_select_vert", corner_in),
+                         (".uv_select_edge", corner_in)):
+        if mesh.attributes.get(name) is not None:
+            _set_bool_attribute(mesh, name, None, values)
+    mesh.update()
+
+
+def _set_bool_attribute(mesh, name, domain, values):
+    attr = mesh.attributes.get(name)
+    if attr is None:
+        attr = mesh.attributes.new(name, "BOOLEAN", domain)
+    if len(attr.data) != len(values):
+        raise ValueError(f"mesh '{mesh.name}': attribute {name} has {len(attr.data)} values, "
+                         f"expected {len(values)}")
+    attr.data.foreach_set("value", np.ascontiguousarray(values, dtype=bool))
+
+
+def select_all_faces(mesh):
+    select_faces(mesh, np.ones(len(mesh.polygons), dtype=bool))
+
+
+# ---------------------------------------------------------------------------------------------
+# Creating meshes (batch scripts and tests)
+
+
+def new_mesh(name, positions, corner_verts, face_sizes):
+    """A new ``bpy.types.Mesh`` built in bulk from a polygon soup (no UV map, no seams)."""
+    import bpy
+
+    positions = np.ascontiguousarray(positions, dtype=np.float32).reshape(-1, 3)
+    corner_verts = np.ascontiguousarray(corner_verts, dtype=np.int32).reshape(-1)
+    face_sizes = np.ascontiguousarray(face_sizes, dtype=np.int32).reshape(-1)
+    if int(face_sizes.sum()) != corner_verts.size:
+        raise ValueError("face sizes do not add up to the number of corners")
+    loop_start = np.zeros(face_sizes.size, dtype=np.int32)
+    np.cumsum(face_sizes[:-1], out=loop_start[1:])
+
+    # Edges computed here rather than by ``mesh.update(calc_edges=True)``: in Blender 5.0.1 that
+    # call leaves a ``.select_edge`` attribute of the wrong type, and writing the edge
+    # selection afterwards crashes Blender.
+    n_v = positions.shape[0]
+    following = np.arange(corner_verts.size) + 1
+    following[loop_start + face_sizes - 1] = loop_start
+    a = corner_verts.astype(np.int64)
+    b = corner_verts[following].astype(np.int64)
+    keys, corner_edges = np.unique(np.minimum(a, b) * n_v + np.maximum(a, b), return_inverse=True)
+    edge_verts = np.column_stack([keys // n_v, keys % n_v]).astype(np.int32)
+
+    mesh = bpy.data.meshes.new(name)
+    mesh.vertices.add(n_v)
+    mesh.edges.add(edge_verts.shape[0])
+    mesh.loops.add(corner_verts.size)
+    mesh.polygons.add(face_sizes.size)
+    mesh.vertices.foreach_set("co", positions.reshape(-1))
+    mesh.edges.foreach_set("vertices", edge_verts.reshape(-1))
+    mesh.loops.foreach_set("vertex_index", corner_verts)
+    mesh.loops.foreach_set("edge_index", corner_edges.astype(np.int32).reshape(-1))
+    mesh.polygons.foreach_set("loop_start", loop_start)
+    mesh.update()
+    # Blender repairs what it cannot store (e.g. duplicate faces); callers re-read the topology.
+    mesh.validate(verbose=False)
+    return mesh
+
+
+def corner_faces(face_sizes):
+    """``(C,)`` index of the face owning each corner."""
+    return np.repeat(np.arange(len(face_sizes), dtype=np.int64), face_sizes)

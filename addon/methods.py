@@ -1,0 +1,144 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""The table of unwrap methods and their options: the single place to add a method.
+
+To add a method (``abf``, ``arap``, ``slim``, ``mips``, ``scaffold`` …): append one
+:class:`MethodInfo` to :data:`METHODS`; if it takes options the table does not know yet, add
+them to :data:`OPTIONS`.  The operator, the sidebar defaults, the redo panel and the batch
+scripts all read these two tables.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Callable
+
+from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty
+
+
+@dataclass(frozen=True)
+class MethodInfo:
+    id: str            # name understood by uvflat.unwrap(method=...)
+    label: str
+    description: str
+    options: tuple[str, ...]  # keys of OPTIONS shown and passed for this method
+
+
+METHODS: tuple[MethodInfo, ...] = (
+    MethodInfo("tutte", "Tutte", "Uniform barycentric map, boundary fixed to a convex shape; "
+               "never flips (Tutte 1963)", ("boundary",)),
+    MethodInfo("harmonic", "Harmonic", "Cotangent-weight barycentric map, boundary fixed "
+               "(Eck et al. 1995)", ("boundary",)),
+    MethodInfo("mean_value", "Mean Value", "Mean-value-weight barycentric map, boundary fixed; "
+               "never flips (Floater 2003)", ("boundary",)),
+    MethodInfo("lscm", "LSCM", "Least squares conformal map, free boundary "
+               "(Lévy et al. 2002)", ()),
+    MethodInfo("spectral", "Spectral Conformal", "Conformal map from a generalized eigenproblem, "
+               "free boundary (Mullen et al. 2008)", ("max_iterations", "tolerance_exponent")),
+    # Next: MethodInfo("abf", ...), MethodInfo("arap", ...), MethodInfo("slim", ...),
+    #       MethodInfo("mips", ...), MethodInfo("scaffold", ...)
+)
+
+METHOD_BY_ID = {m.id: m for m in METHODS}
+
+
+@dataclass(frozen=True)
+class OptionInfo:
+    keyword: str                              # keyword argument of uvflat.unwrap
+    make_property: Callable[[], Any]          # a fresh bpy property (one per class using it)
+    to_core: Callable[[Any], Any] = lambda value: value
+
+
+OPTIONS: dict[str, OptionInfo] = {
+    "boundary": OptionInfo(
+        "boundary",
+        lambda: EnumProperty(
+            name="Boundary",
+            description="Shape the chart boundary is fixed to (by arc length)",
+            items=(("circle", "Circle", "Boundary on the unit circle"),
+                   ("square", "Square", "Boundary on the unit square")),
+            default="circle",
+        ),
+    ),
+    "max_iterations": OptionInfo(
+        "max_iterations",
+        lambda: IntProperty(
+            name="Iterations",
+            description="Maximum iterations of the eigen solver",
+            default=200, min=1, soft_max=5000,
+        ),
+    ),
+    "tolerance_exponent": OptionInfo(
+        "tolerance",
+        lambda: IntProperty(
+            name="Tolerance (10^x)",
+            description="Convergence tolerance of the eigen solver, as a power of ten",
+            default=-10, min=-16, max=-1,
+        ),
+        lambda exponent: 10.0 ** int(exponent),
+    ),
+}
+
+
+def common_properties() -> dict[str, Any]:
+    """Fresh bpy properties shared by the operator and the scene defaults."""
+    props: dict[str, Any] = {
+        "method": EnumProperty(
+            name="Method",
+            description="Parameterization method",
+            items=tuple((m.id, m.label, m.description) for m in METHODS),
+            default="lscm",
+        ),
+        "pack": BoolProperty(
+            name="Pack Islands",
+            description="Pack the new islands with Blender's packer. When off, each new island "
+                        "is fitted to where its faces' previous UVs were",
+            default=True,
+        ),
+        "pack_shape": EnumProperty(
+            name="Shape",
+            description="Island shape used by Blender's packer",
+            items=(("AABB", "Bounding Box", "Fast (what Blender's own unwrap uses)"),
+                   ("CONVEX", "Convex Hull", "Tighter, slower"),
+                   ("CONCAVE", "Exact Shape", "Tightest, slowest")),
+            default="AABB",
+        ),
+        "margin": FloatProperty(
+            name="Margin",
+            description="Space between packed islands",
+            default=0.001, min=0.0, max=1.0, precision=3, step=0.1,
+        ),
+    }
+    for key, option in OPTIONS.items():
+        props[key] = option.make_property()
+    return props
+
+
+SETTING_NAMES: tuple[str, ...] = tuple(common_properties().keys())
+
+
+def add_properties(cls):
+    """Class decorator: put the shared properties into ``cls.__annotations__``."""
+    annotations = dict(getattr(cls, "__annotations__", {}))
+    annotations.update(common_properties())
+    cls.__annotations__ = annotations
+    return cls
+
+
+def core_options(props) -> dict[str, Any]:
+    """The keyword options of ``uvflat.unwrap`` for the method chosen in ``props``."""
+    info = METHOD_BY_ID[props.method]
+    return {OPTIONS[key].keyword: OPTIONS[key].to_core(getattr(props, key)) for key in info.options}
+
+
+def draw_settings(layout, props) -> None:
+    """Draw the method and only that method's options (redo panel and sidebar)."""
+    layout.use_property_split = True
+    layout.use_property_decorate = False
+    layout.prop(props, "method")
+    for key in METHOD_BY_ID[props.method].options:
+        layout.prop(props, key)
+    layout.prop(props, "pack")
+    col = layout.column()
+    col.active = props.pack
+    col.prop(props, "pack_shape")
+    col.prop(props, "margin")

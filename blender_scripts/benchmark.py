@@ -1,0 +1,238 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""Time and quality of uvflat against Blender's own unwrap, same mesh, same seams, same process.
+
+    .venv/bin/python blender_scripts/benchmark.py [--meshes camelhead,suzanne] \
+        [--methods lscm,tutte] [--repeat 3] [--out bench.md]
+
+For every mesh (the files of ../shared/meshes and Blender's Suzanne with seams from her own UV
+islands) and every method, the whole operator call is timed, from ``bpy.ops...`` in edit mode
+to the UVs written (both sides pack their islands with Blender's packer).  Medians of
+``--repeat`` runs.  Quality is measured by ``uvflat.metrics`` on the UVs read back from
+Blender, so both sides are measured by the same code.
+
+Columns: seconds (median), ratio to Blender CONFORMAL and to the Blender method of the same
+family, faces left without a UV solution (all corners on one point: Blender refuses closed
+charts, uvflat reports failed charts), charts, flipped triangles, overlapping charts, and the
+area-weighted conformal / area / symmetric Dirichlet distortions (1 is perfect).
+
+The ``factor s`` column is the time of one sparse Cholesky factorization of the chart system
+for the linear methods, if the uvflat module provides ``uvflat.factorization_seconds(positions,
+corner_verts, face_sizes, *, method, seams, selected)`` (the hook below); "n/a" otherwise.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import bpy  # noqa: E402
+import numpy as np  # noqa: E402
+
+import common  # noqa: E402
+
+BLENDER_METHODS = ("ANGLE_BASED", "CONFORMAL", "MINIMUM_STRETCH")
+# The Blender unwrap of the same family as each uvflat method (the linear ones compare with
+# Blender's linear LSCM; ABF with ABF++; the isometric/nonlinear ones with SLIM).
+FAMILY = {
+    "tutte": "CONFORMAL", "harmonic": "CONFORMAL", "mean_value": "CONFORMAL",
+    "lscm": "CONFORMAL", "spectral": "CONFORMAL", "mips": "CONFORMAL",
+    "abf": "ANGLE_BASED",
+    "arap": "MINIMUM_STRETCH", "slim": "MINIMUM_STRETCH", "scaffold": "MINIMUM_STRETCH",
+}
+LINEAR = {"tutte", "harmonic", "mean_value", "lscm"}
+MARGIN = 0.001
+
+
+def factorization_seconds(uvflat, positions, corner_verts, face_sizes, method, seams):
+    """Hook: one sparse Cholesky factorization of the chart system, if the module exposes it."""
+    hook = getattr(uvflat, "factorization_seconds", None)
+    if hook is None or method not in LINEAR:
+        return None
+    return float(hook(positions, corner_verts, face_sizes, method=method, seams=seams,
+                      selected=None))
+
+
+def mesh_list(names):
+    available = {"suzanne": None}
+    if common.SHARED_MESHES.is_dir():
+        for path in sorted(common.SHARED_MESHES.iterdir()):
+            if path.suffix.lower() in (".off", ".obj", ".ply"):
+                available[path.stem] = path
+    else:
+        print(f"note: {common.SHARED_MESHES} not found; only Blender's primitives are measured")
+    if names:
+        missing = [n for n in names if n not in available]
+        if missing:
+            raise SystemExit(f"unknown mesh(es) {missing}; available: {', '.join(available)}")
+        return {n: available[n] for n in names}
+    return available
+
+
+def load(name, path):
+    common.reset_scene()
+    common.load_addon()
+    if path is None:
+        return common.suzanne()
+    return common.load_mesh_object(path)
+
+
+def unsolved_faces(uv, face_sizes):
+    """Faces whose corners all sit on one UV point (no solution was written)."""
+    starts = np.zeros(len(face_sizes), dtype=np.int64)
+    np.cumsum(face_sizes[:-1], out=starts[1:])
+    lo = np.minimum.reduceat(uv, starts, axis=0)
+    hi = np.maximum.reduceat(uv, starts, axis=0)
+    return int(np.all(hi - lo == 0.0, axis=1).sum())
+
+
+def run_once(obj, kind, method):
+    """One end-to-end unwrap of all faces; returns (seconds, error message or None)."""
+    common.edit_mode([obj])
+    t0 = time.perf_counter()
+    try:
+        if kind == "uvflat":
+            result = bpy.ops.uv.uvflat_unwrap(method=method, pack=True, margin=MARGIN)
+        else:
+            result = bpy.ops.uv.unwrap(method=method, margin=MARGIN)
+        error = None if "FINISHED" in result else f"returned {set(result)}"
+    except RuntimeError as ex:  # a report of type ERROR raises from bpy.ops
+        error = str(ex).strip().splitlines()[-1]
+    seconds = time.perf_counter() - t0
+    common.object_mode()
+    return seconds, error
+
+
+def measure(uvflat, mesh_io, obj, kind, method, repeat):
+    mesh = obj.data
+    positions, corner_verts, face_sizes = mesh_io.read_topology(mesh)
+    times, error = [], None
+    for _ in range(repeat):
+        # start from the same state every time: all UVs at the origin
+        mesh_io.write_uv(mesh, mesh_io.ensure_uv_map(mesh)[0],
+                         np.zeros((len(corner_verts), 2), dtype=np.float32))
+        seconds, error = run_once(obj, kind, method)
+        if error:
+            break
+        times.append(seconds)
+    row = {"kind": kind, "method": method, "error": error,
+           "seconds": statistics.median(times) if times else None}
+    if error:
+        return row
+    uv = mesh_io.read_uv(mesh).astype(np.float64)
+    row["unsolved"] = unsolved_faces(uv, face_sizes)
+    try:
+        m = uvflat.metrics(positions, corner_verts, face_sizes, uv)
+        row.update(charts=m.charts, flips=m.flips, overlapping=m.overlapping_charts,
+                   conformal=m.conformal, area=m.area, dirichlet=m.symmetric_dirichlet)
+    except uvflat.UvflatError as ex:
+        row["metrics_error"] = str(ex)
+    if kind == "uvflat":
+        summary = sys.modules[common.ADDON_MODULE].engine.LAST_SUMMARY
+        if summary is not None and summary.failed:
+            row["note"] = f"{len(summary.failed)} chart(s) failed: {summary.failed[0].reason}"
+        try:
+            row["factor"] = factorization_seconds(uvflat, positions, corner_verts, face_sizes,
+                                                  method, mesh_io.read_seams(mesh))
+        except Exception as ex:  # the hook is optional; never let it break the table
+            row["factor_error"] = str(ex)
+    return row
+
+
+def fmt(value, spec):
+    return "–" if value is None else format(value, spec)
+
+
+def table(results):
+    head = ("| mesh | faces | method | seconds | × CONFORMAL | × family | unsolved faces | charts "
+            "| flips | overlapping | conformal | area | sym. Dirichlet | factor s | note |")
+    lines = [head, "|" + "---|" * (head.count("|") - 1)]
+    for mesh_name, n_faces, rows in results:
+        by_method = {r["method"]: r for r in rows if r["kind"] == "blender"}
+        for r in rows:
+            label = r["method"] if r["kind"] == "uvflat" else f"Blender {r['method']}"
+            if r["error"]:
+                lines.append(f"| {mesh_name} | {n_faces} | {label} | – | – | – | – | – | – | – | – | – "
+                             f"| – | – | refused: {r['error']} |")
+                continue
+            ref = by_method.get("CONFORMAL", {}).get("seconds")
+            fam_name = FAMILY.get(r["method"]) if r["kind"] == "uvflat" else r["method"]
+            fam = by_method.get(fam_name, {}).get("seconds") if fam_name else None
+            ratio = fmt(r["seconds"] / ref, ".2f") if ref else "–"
+            fam_ratio = (f"{r['seconds'] / fam:.2f} ({fam_name})" if fam else "–")
+            factor = r.get("factor")
+            note = r.get("note") or r.get("metrics_error") or r.get("factor_error") or ""
+            lines.append(
+                f"| {mesh_name} | {n_faces} | {label} | {r['seconds']:.4f} | {ratio} | {fam_ratio} "
+                f"| {r.get('unsolved', '–')} | {r.get('charts', '–')} | {r.get('flips', '–')} "
+                f"| {r.get('overlapping', '–')} | {fmt(r.get('conformal'), '.4f')} "
+                f"| {fmt(r.get('area'), '.4f')} | {fmt(r.get('dirichlet'), '.4f')} "
+                f"| {fmt(factor, '.4f') if factor is not None else 'n/a'} | {note} |")
+    return "\n".join(lines)
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description="uvflat vs Blender's unwrap.")
+    parser.add_argument("--meshes", default="", help="comma-separated mesh names (default: all)")
+    parser.add_argument("--methods", default="", help="comma-separated uvflat methods (default: all)")
+    parser.add_argument("--blender-methods", default=",".join(BLENDER_METHODS),
+                        help="comma-separated Blender unwrap methods")
+    parser.add_argument("--repeat", type=int, default=3, help="repetitions (median reported)")
+    parser.add_argument("--out", type=Path, default=None, help="write the markdown table here")
+    args = parser.parse_args(argv)
+
+    import uvflat
+
+    addon = common.load_addon()
+    # the methods both the core and the add-on's method table know
+    known = [m.id for m in addon.methods.METHODS if m.id in uvflat.METHODS]
+    not_in_addon = [m for m in uvflat.METHODS if m not in known]
+    if not_in_addon:
+        print(f"note: the core also has {', '.join(not_in_addon)}, not yet in the add-on's method table")
+    methods = [m for m in args.methods.split(",") if m] or known
+    unknown = [m for m in methods if m not in known]
+    if unknown:
+        raise SystemExit(f"unknown uvflat method(s) {unknown}; available: {', '.join(known)}")
+    blender_methods = [m for m in args.blender_methods.split(",") if m]
+    meshes = mesh_list([n for n in args.meshes.split(",") if n])
+
+    results = []
+    for name, path in meshes.items():
+        try:
+            obj = load(name, path)
+        except Exception as ex:
+            print(f"{name}: could not load: {ex}", flush=True)
+            results.append((name, "?", [{"kind": "uvflat", "method": "load", "error": str(ex)}]))
+            continue
+        mesh_io = sys.modules[common.ADDON_MODULE].mesh_io
+        n_faces = len(obj.data.polygons)
+        print(f"{name}: {n_faces} faces, {mesh_io.read_seams(obj.data).shape[0]} seam edges", flush=True)
+        rows = []
+        for method in blender_methods:
+            rows.append(measure(uvflat, mesh_io, obj, "blender", method, args.repeat))
+            print(f"  Blender {method:<16} {fmt(rows[-1]['seconds'], '.4f')} s"
+                  f"{'  ' + rows[-1]['error'] if rows[-1]['error'] else ''}", flush=True)
+        for method in methods:
+            rows.append(measure(uvflat, mesh_io, obj, "uvflat", method, args.repeat))
+            print(f"  uvflat  {method:<16} {fmt(rows[-1]['seconds'], '.4f')} s"
+                  f"{'  ' + rows[-1]['error'] if rows[-1]['error'] else ''}", flush=True)
+        results.append((name, n_faces, rows))
+
+    text = table(results)
+    header = (f"uvflat benchmark: Blender {bpy.app.version_string}, uvflat "
+              f"{getattr(uvflat, '__version__', '?')}, median of {args.repeat}, margin {MARGIN}\n\n")
+    print()
+    print(header + text)
+    if args.out:
+        args.out.parent.mkdir(parents=True, exist_ok=True)
+        args.out.write_text(header + text + "\n")
+        print(f"\n-> {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

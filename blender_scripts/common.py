@@ -1,0 +1,220 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""Helpers shared by the headless scripts (unwrap, benchmark, demo) and the add-on tests.
+
+The add-on is registered straight from ``addon/`` in this repository (same code as the
+installed extension), and every read or write of mesh data goes through its ``mesh_io``.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import sys
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parent.parent
+SHARED_MESHES = REPO.parent / "shared" / "meshes"
+ADDON_MODULE = "uvflat_addon"
+
+
+_MESH_IO = None
+
+
+def use_mesh_io(module):
+    """Use this ``mesh_io`` module (e.g. the installed extension's) instead of ``addon/``'s."""
+    global _MESH_IO
+    _MESH_IO = module
+
+
+def mesh_io():
+    return _MESH_IO if _MESH_IO is not None else load_addon().mesh_io
+
+
+def load_addon(register=True):
+    """Import ``addon/`` as the module ``uvflat_addon`` and register it (once)."""
+    if ADDON_MODULE in sys.modules:
+        return sys.modules[ADDON_MODULE]
+    spec = importlib.util.spec_from_file_location(
+        ADDON_MODULE, REPO / "addon" / "__init__.py",
+        submodule_search_locations=[str(REPO / "addon")])
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[ADDON_MODULE] = module
+    spec.loader.exec_module(module)
+    if register:
+        module.register()
+    return module
+
+
+def reset_scene():
+    """Empty the scene (factory settings, no objects)."""
+    import bpy
+
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+
+
+# ---------------------------------------------------------------------------------------------
+# Loading meshes
+
+
+def read_off(path):
+    """Read an OFF file: ``(positions (V,3), corner_verts (C,), face_sizes (F,))``."""
+    text = Path(path).read_text()
+    lines = [ln.split("#", 1)[0].strip() for ln in text.splitlines()]
+    lines = [ln for ln in lines if ln]
+    header = lines[0]
+    if not header.endswith("OFF"):
+        raise ValueError(f"{path}: not an OFF file")
+    rest = header[len("OFF"):].split() if header != "OFF" else []
+    at = 1
+    if not rest:
+        rest = lines[1].split()
+        at = 2
+    n_v, n_f = int(rest[0]), int(rest[1])
+    positions = np.array(" ".join(lines[at:at + n_v]).split(), dtype=np.float64)
+    positions = positions.reshape(n_v, -1)[:, :3]
+    face_rows = lines[at + n_v:at + n_v + n_f]
+    tokens = [row.split() for row in face_rows]
+    face_sizes = np.array([int(t[0]) for t in tokens], dtype=np.int64)
+    corner_verts = np.fromiter((int(v) for t, n in zip(tokens, face_sizes) for v in t[1:1 + n]),
+                               dtype=np.int64, count=int(face_sizes.sum()))
+    return positions, corner_verts, face_sizes
+
+
+def link_mesh_object(name, mesh):
+    import bpy
+
+    obj = bpy.data.objects.new(name, mesh)
+    bpy.context.scene.collection.objects.link(obj)
+    return obj
+
+
+def load_mesh_object(path):
+    """Load .off/.obj/.ply/.blend as one mesh object in the current scene and return it."""
+    import bpy
+
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix == ".off":
+        return link_mesh_object(path.stem, mesh_io().new_mesh(path.stem, *read_off(path)))
+    before = set(bpy.data.objects)
+    if suffix == ".obj":
+        bpy.ops.wm.obj_import(filepath=str(path))
+    elif suffix == ".ply":
+        bpy.ops.wm.ply_import(filepath=str(path))
+    elif suffix == ".blend":
+        with bpy.data.libraries.load(str(path), link=False) as (src, dst):
+            dst.objects = list(src.objects)
+        for obj in dst.objects:
+            if obj is not None and obj.type == "MESH":
+                bpy.context.scene.collection.objects.link(obj)
+    else:
+        raise ValueError(f"{path}: unsupported format (use .off, .obj, .ply or .blend)")
+    new = [o for o in bpy.data.objects if o not in before and o.type == "MESH"
+           and o.name in bpy.context.scene.objects]
+    if not new:
+        raise ValueError(f"{path}: no mesh object found")
+    return new[0]
+
+
+def suzanne(name="Suzanne"):
+    """Blender's monkey primitive with seams marked from its own UV islands."""
+    import bpy
+
+    bpy.ops.mesh.primitive_monkey_add()
+    obj = bpy.context.active_object
+    obj.name = name
+    bpy.ops.object.mode_set(mode="EDIT")
+    bpy.ops.mesh.select_all(action="SELECT")
+    bpy.ops.uv.seams_from_islands(mark_seams=True)
+    bpy.ops.object.mode_set(mode="OBJECT")
+    return obj
+
+
+def seams_from_islands(obj):
+    """Mark seams from the islands of ``obj``'s active UV map (Blender's own operator)."""
+    import bpy
+
+    edit_mode([obj])
+    bpy.ops.mesh.select_all(action="SELECT")
+    bpy.ops.uv.seams_from_islands(mark_seams=True)
+    bpy.ops.object.mode_set(mode="OBJECT")
+
+
+def edit_mode(objects, select_all=True):
+    """Make ``objects`` (mesh objects) the ones in edit mode, all faces selected."""
+    import bpy
+
+    if bpy.context.object is not None and bpy.context.object.mode != "OBJECT":
+        bpy.ops.object.mode_set(mode="OBJECT")
+    for o in bpy.context.view_layer.objects:
+        o.select_set(o in objects)
+    if select_all:
+        for o in objects:
+            mesh_io().select_all_faces(o.data)
+    bpy.context.view_layer.objects.active = objects[0]
+    bpy.ops.object.mode_set(mode="EDIT")
+
+
+def object_mode():
+    import bpy
+
+    if bpy.context.object is not None and bpy.context.object.mode != "OBJECT":
+        bpy.ops.object.mode_set(mode="OBJECT")
+
+
+# ---------------------------------------------------------------------------------------------
+# Drawing UV layouts
+
+
+def draw_layout(uv, face_sizes, size=1024, title=None):
+    """A Pillow image of a UV layout: faces grey, flipped faces red, edges dark."""
+    from PIL import Image, ImageDraw
+
+    uv = np.asarray(uv, dtype=np.float64)
+    face_sizes = np.asarray(face_sizes, dtype=np.int64)
+    starts = np.zeros(len(face_sizes), dtype=np.int64)
+    np.cumsum(face_sizes[:-1], out=starts[1:])
+    # signed area per face (shoelace), vectorised over corners
+    nxt = np.arange(len(uv)) + 1
+    nxt[starts + face_sizes - 1] = starts
+    cross = uv[:, 0] * uv[nxt, 1] - uv[nxt, 0] * uv[:, 1]
+    area = np.add.reduceat(cross, starts) * 0.5 if len(starts) else np.zeros(0)
+    majority = 1.0 if (area > 0).sum() >= (area < 0).sum() else -1.0
+    flipped = area * majority <= 0
+
+    img = Image.new("RGB", (size, size), (255, 255, 255))
+    draw = ImageDraw.Draw(img)
+    pix = np.column_stack([uv[:, 0] * (size - 1), (1.0 - uv[:, 1]) * (size - 1)])
+    for k in (0, 1):
+        for t in np.linspace(0, size - 1, 9):
+            xy = [(t, 0), (t, size - 1)] if k == 0 else [(0, t), (size - 1, t)]
+            draw.line(xy, fill=(228, 228, 228))
+    pts = pix.tolist()
+    for f, (s, n) in enumerate(zip(starts.tolist(), face_sizes.tolist())):
+        poly = [tuple(p) for p in pts[s:s + n]]
+        draw.polygon(poly, fill=(235, 90, 80) if flipped[f] else (205, 215, 230),
+                     outline=(40, 60, 90))
+    if title:
+        draw.rectangle([0, 0, size, 22], fill=(255, 255, 255))
+        draw.text((6, 5), title, fill=(0, 0, 0))
+    return img
+
+
+def save_layout(path, uv, face_sizes, size=1024, title=None):
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    draw_layout(uv, face_sizes, size=size, title=title).save(path)
+    return path
+
+
+def grid(images, columns):
+    """Tile same-size Pillow images into one."""
+    from PIL import Image
+
+    w, h = images[0].size
+    rows = (len(images) + columns - 1) // columns
+    out = Image.new("RGB", (w * columns, h * rows), (255, 255, 255))
+    for i, im in enumerate(images):
+        out.paste(im, ((i % columns) * w, (i // columns) * h))
+    return out

@@ -1,0 +1,537 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""Headless-bpy tests of the uvflat extension *as installed* from dist/uvflat-<version>.zip.
+
+The zip is built by ``bash .ci/build`` (``bash .ci/bootstrap test`` runs it first); the tests
+install it into a throw-away Blender user folder with Blender's own extension installer and
+drive the registered operator ``bpy.ops.uv.uvflat_unwrap``.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import tempfile
+from pathlib import Path
+from types import SimpleNamespace
+
+# A private Blender user folder, set before bpy is first imported in this process.
+_USER_DIR = tempfile.mkdtemp(prefix="uvflat-blender-user-")
+if "bpy" not in sys.modules:
+    os.environ["BLENDER_USER_RESOURCES"] = _USER_DIR
+
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+
+bpy = pytest.importorskip("bpy", reason="the bpy module (Blender as a Python module) is not installed")
+import addon_utils  # noqa: E402
+
+REPO = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(REPO / "blender_scripts"))
+import common  # noqa: E402
+
+SHARED = REPO.parent / "shared" / "meshes"
+SHARED_MESHES = ("camelhead.off", "lion.off", "beetle.off", "halftunnel.off")
+# Methods that promise no flipped triangle (positive weights, convex boundary).
+FLIP_FREE = [("tutte", {}), ("mean_value", {"boundary": "circle"})]
+# LSCM promises no injectivity; it must still solve, respect seams and report flips honestly,
+# and it has none on these disks (where Blender's CONFORMAL flips thousands on camelhead).
+LSCM_NO_FLIP_MESHES = {"camelhead.off", "lion.off", "beetle.off"}
+
+
+# ---------------------------------------------------------------------------------------------
+# Installation
+
+
+def _extension_zip():
+    if os.environ.get("UVFLAT_EXTENSION_ZIP"):
+        return Path(os.environ["UVFLAT_EXTENSION_ZIP"])
+    manifest = (REPO / "addon" / "blender_manifest.toml").read_text()
+    version = next(line.split('"')[1] for line in manifest.splitlines()
+                   if line.startswith("version = "))
+    path = REPO / "dist" / f"uvflat-{version}.zip"
+    assert path.is_file(), f"{path} is missing: build it with `bash .ci/build`"
+    return path
+
+
+def _user_repo():
+    """The extension repository to install into, inside a temporary folder."""
+    repos = bpy.context.preferences.extensions.repos
+    repo = repos.get("user_default") if hasattr(repos, "get") else None
+    if repo is None:
+        repo = next((r for r in repos if r.module == "user_default"), None)
+    if repo is not None and repo.directory.startswith(_USER_DIR):
+        return repo
+    # bpy was imported before this module: add a repository of our own in the temp folder
+    return repos.new(name="uvflat tests", module="uvflat_tests", custom_directory=os.path.join(
+        _USER_DIR, "extensions", "uvflat_tests"), source="USER")
+
+
+@pytest.fixture(scope="module")
+def ext():
+    zip_path = _extension_zip()
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    repo = _user_repo()
+    result = bpy.ops.extensions.package_install_files(
+        filepath=str(zip_path), repo=repo.module, enable_on_install=True, overwrite=True)
+    module_name = f"bl_ext.{repo.module}.uvflat"
+    assert "FINISHED" in result, f"package_install_files returned {result}"
+    loaded_default, loaded_state = addon_utils.check(module_name)
+    assert loaded_default and loaded_state, (
+        f"{module_name} is not enabled after installing {zip_path.name} "
+        f"(loaded_default={loaded_default}, loaded_state={loaded_state})")
+    assert hasattr(bpy.types, "UV_OT_uvflat_unwrap"), "the operator was not registered"
+    module = sys.modules[module_name]
+    assert Path(module.__file__).resolve().is_relative_to(Path(repo.directory).resolve())
+    common.use_mesh_io(module.mesh_io)
+    yield module
+    common.use_mesh_io(None)
+    addon_utils.disable(module_name)
+
+
+@pytest.fixture
+def scene(ext):
+    """An empty scene in object mode (without resetting preferences: the add-on stays on)."""
+    common.object_mode()
+    for obj in list(bpy.data.objects):
+        bpy.data.objects.remove(obj)
+    for mesh in list(bpy.data.meshes):
+        bpy.data.meshes.remove(mesh)
+    tool_settings = bpy.context.scene.tool_settings
+    tool_settings.mesh_select_mode = (False, False, True)
+    yield bpy.context.scene
+    common.object_mode()
+
+
+# ---------------------------------------------------------------------------------------------
+# Helpers (all mesh access through the installed add-on's mesh_io)
+
+
+def unwrap(ext, objects, *, select_all=True, **props):
+    """Run the operator with ``objects`` in edit mode; back in object mode afterwards."""
+    common.edit_mode(objects, select_all=select_all)
+    try:
+        result = bpy.ops.uv.uvflat_unwrap(**props)
+        assert all(o.mode == "EDIT" for o in objects), "objects must be back in edit mode"
+    finally:
+        common.object_mode()
+    return result, ext.engine.LAST_SUMMARY
+
+
+def read(ext, obj):
+    io = ext.mesh_io
+    positions, corner_verts, face_sizes = io.read_topology(obj.data)
+    return SimpleNamespace(positions=positions, corner_verts=corner_verts, face_sizes=face_sizes,
+                           uv=(io.read_uv(obj.data).astype(np.float64)
+                               if io.active_uv_name(obj.data) is not None
+                               else np.zeros((len(corner_verts), 2))),
+                           seams=io.read_seams(obj.data))
+
+
+def fan_triangles(face_sizes):
+    """Corner triples of a fan triangulation of every face, and the face of each triangle."""
+    face_sizes = np.asarray(face_sizes, dtype=np.int64)
+    starts = np.zeros(len(face_sizes), dtype=np.int64)
+    np.cumsum(face_sizes[:-1], out=starts[1:])
+    n_tris = face_sizes - 2
+    face = np.repeat(np.arange(len(face_sizes)), n_tris)
+    offset = np.arange(n_tris.sum()) - np.repeat(np.cumsum(n_tris) - n_tris, n_tris)
+    first = starts[face]
+    return np.column_stack([first, first + 1 + offset, first + 2 + offset]), face
+
+
+def _signed(uv, a, b, c):
+    pa, pb, pc = uv[a], uv[b], uv[c]
+    return (pb[:, 0] - pa[:, 0]) * (pc[:, 1] - pa[:, 1]) - (pc[:, 0] - pa[:, 0]) * (pb[:, 1] - pa[:, 1])
+
+
+def flipped_triangles(data, faces_chart):
+    """Faces that are flipped in UV: computed here, independently of the core.
+
+    Triangles and n-gons (n >= 5) by a fan from their first corner; a quad counts as flipped
+    only if neither of its two diagonals splits it into two triangles of the chart's
+    orientation (a non-convex quad image is not a flip).  The orientation of a chart is the
+    sign of the majority of its faces' areas.  Returns the number of flipped faces.
+    """
+    fs = np.asarray(data.face_sizes, dtype=np.int64)
+    chart = np.asarray(faces_chart)
+    starts = np.zeros(len(fs), dtype=np.int64)
+    np.cumsum(fs[:-1], out=starts[1:])
+    # orientation per chart from the polygon areas (shoelace)
+    nxt = np.arange(len(data.uv)) + 1
+    nxt[starts + fs - 1] = starts
+    cross = data.uv[:, 0] * data.uv[nxt, 1] - data.uv[nxt, 0] * data.uv[:, 1]
+    area = np.add.reduceat(cross, starts)
+    sign = np.zeros(len(fs))
+    for k in np.unique(chart[chart >= 0]):
+        a = area[chart == k]
+        sign[chart == k] = 1.0 if (a > 0).sum() >= (a < 0).sum() else -1.0
+    flipped = np.zeros(len(fs), dtype=bool)
+    tris, face = fan_triangles(fs)
+    bad = _signed(data.uv, tris[:, 0], tris[:, 1], tris[:, 2]) * sign[face] <= 0
+    not_quad = fs[face] != 4
+    np.logical_or.at(flipped, face[not_quad], bad[not_quad])
+    q = np.flatnonzero(fs == 4)
+    if len(q):
+        c0, c1, c2, c3 = (starts[q] + i for i in range(4))
+        s = sign[q]
+        split02 = ((_signed(data.uv, c0, c1, c2) * s > 0) & (_signed(data.uv, c0, c2, c3) * s > 0))
+        split13 = ((_signed(data.uv, c1, c2, c3) * s > 0) & (_signed(data.uv, c1, c3, c0) * s > 0))
+        flipped[q] = ~(split02 | split13)
+    return int((flipped & (chart >= 0)).sum())
+
+
+def edge_pairs(data):
+    """Interior edges as pairs of opposite corners: (edge key, c1, c1_next, c2, c2_next)."""
+    fs = np.asarray(data.face_sizes, dtype=np.int64)
+    starts = np.zeros(len(fs), dtype=np.int64)
+    np.cumsum(fs[:-1], out=starts[1:])
+    n_c = len(data.corner_verts)
+    nxt = np.arange(n_c) + 1
+    nxt[starts + fs - 1] = starts
+    v0, v1 = data.corner_verts.astype(np.int64), data.corner_verts[nxt].astype(np.int64)
+    n_v = len(data.positions)
+    key = np.minimum(v0, v1) * n_v + np.maximum(v0, v1)
+    order = np.argsort(key, kind="stable")
+    k = key[order]
+    counts = np.bincount(np.unique(k, return_inverse=True)[1])
+    uniq = np.unique(k)
+    manifold = np.repeat(counts == 2, counts)
+    first = order[manifold][0::2]
+    second = order[manifold][1::2]
+    return uniq[counts == 2], first, nxt[first], second, nxt[second]
+
+
+def seam_check(data, face, chart_kinds=None):
+    """(non-seam edges with a UV jump, seam edges without one) between solved faces.
+
+    ``face[c]`` is the face of corner c; ``chart_kinds`` maps face -> chart kind: charts that
+    the core had to cut (not "disk") may jump away from seams, so they are left out there.
+    """
+    keys, c1, c1n, c2, c2n = edge_pairs(data)
+    n_v = len(data.positions)
+    seam_keys = set((np.minimum(data.seams[:, 0], data.seams[:, 1]).astype(np.int64) * n_v
+                     + np.maximum(data.seams[:, 0], data.seams[:, 1])).tolist())
+    is_seam = np.array([int(k) in seam_keys for k in keys], dtype=bool)
+    # opposite corners: c1 (u -> v) and c2 (v -> u), so c1 and c2n sit on the same vertex
+    same = (np.all(data.uv[c1] == data.uv[c2n], axis=1) & np.all(data.uv[c1n] == data.uv[c2], axis=1))
+    both = np.ones(len(keys), dtype=bool) if face is None else (face[c1] & face[c2])
+    jump_ok = np.ones(len(keys), dtype=bool)
+    if chart_kinds is not None:
+        jump_ok = ~(chart_kinds[c1] | chart_kinds[c2])
+    bad_cont = int((both & ~is_seam & ~same & jump_ok).sum())
+    bad_seam = int((both & is_seam & same).sum())
+    return bad_cont, bad_seam, int((both & is_seam).sum())
+
+
+def corner_mask(face_mask, face_sizes):
+    return np.repeat(np.asarray(face_mask, dtype=bool), face_sizes)
+
+
+def check_result(ext, obj, summary, expect_all_solved=True, expect_no_flips=True):
+    data = read(ext, obj)
+    result = summary.results[obj.name]
+    solved = np.asarray(result.face_solved, dtype=bool)
+    if expect_all_solved:
+        assert solved.all(), summary.line()
+    chart = np.where(solved, np.asarray(result.chart), -1)
+    import uvflat
+
+    metrics = uvflat.metrics(data.positions, data.corner_verts, data.face_sizes, data.uv,
+                             selected=solved)
+    if expect_no_flips:
+        assert flipped_triangles(data, chart) == 0, f"{obj.name}: flipped faces; {summary.line()}"
+        assert metrics.flips == 0, f"{obj.name}: uvflat.metrics counts {metrics.flips} flips"
+    else:
+        # The report must tell the truth about the UVs that reached Blender.
+        reported = sum(c.flips for c in result.charts if c.status != "failed")
+        assert metrics.flips == reported, f"{obj.name}: reported {reported}, measured {metrics.flips}"
+    cut = {c.id for c in result.charts if c.kind != "disk"}
+    cut_faces = np.isin(np.asarray(result.chart), list(cut)) if cut else np.zeros(len(solved), bool)
+    bad_cont, bad_seam, n_seam = seam_check(
+        data, corner_mask(solved, data.face_sizes), corner_mask(cut_faces, data.face_sizes))
+    assert bad_cont == 0, f"{obj.name}: {bad_cont} non-seam edges with a UV discontinuity"
+    assert bad_seam == 0, f"{obj.name}: {bad_seam} of {n_seam} seam edges without a UV discontinuity"
+    return data
+
+
+def suzanne(name="Suzanne"):
+    return common.suzanne(name)
+
+
+def shared_mesh(name):
+    if not SHARED.is_dir():
+        pytest.skip(f"{SHARED} is absent (the shared test meshes live beside the repository)")
+    return common.load_mesh_object(SHARED / name)
+
+
+# ---------------------------------------------------------------------------------------------
+# Tests
+
+
+def test_installed_extension_is_enabled_with_menus(ext):
+    assert ext.__name__.startswith("bl_ext.")
+    assert bpy.ops.uv.uvflat_unwrap.idname() == "UV_OT_uvflat_unwrap"
+    for menu_name in ("VIEW3D_MT_uv_map", "IMAGE_MT_uvs_unwrap"):
+        menu = getattr(bpy.types, menu_name)
+        assert ext.ui.menu_entry in menu._dyn_ui_initialize(), f"no entry in {menu_name}"
+    assert hasattr(bpy.types.Scene, "uvflat")
+    assert "UVFLAT_PT_defaults" in dir(bpy.types)
+
+
+def test_method_table_matches_core(ext):
+    import uvflat
+
+    ids = [m.id for m in ext.methods.METHODS]
+    assert set(ids) <= set(uvflat.METHODS), f"add-on lists methods the core lacks: {ids}"
+    assert {"tutte", "harmonic", "mean_value", "lscm", "spectral"} <= set(ids)
+
+
+@pytest.mark.parametrize("method,options", FLIP_FREE + [("lscm", {})],
+                         ids=[m for m, _ in FLIP_FREE] + ["lscm"])
+def test_suzanne_seams_and_no_flips(ext, scene, method, options):
+    obj = suzanne()
+    assert len(ext.mesh_io.read_seams(obj.data)) > 0
+    result, summary = unwrap(ext, [obj], method=method, **options)
+    assert result == {"FINISHED"}
+    assert summary.charts >= 2, summary.line()
+    # every chart solved; no flips for the flip-free methods; UV jumps exactly at seams
+    check_result(ext, obj, summary, expect_no_flips=(method != "lscm"))
+
+
+@pytest.mark.parametrize("method,options", FLIP_FREE + [("lscm", {})],
+                         ids=[m for m, _ in FLIP_FREE] + ["lscm"])
+def test_suzanne_every_chart_solved(ext, scene, method, options):
+    """Every island of Suzanne (seams from her own UVs) is a disk, the head included: two
+    quads around a valence-2 vertex must not be split along the same diagonal."""
+    obj = suzanne()
+    result, summary = unwrap(ext, [obj], method=method, **options)
+    assert result == {"FINISHED"}
+    assert not summary.failed, summary.line()
+
+
+@pytest.mark.parametrize("mesh", SHARED_MESHES)
+@pytest.mark.parametrize("method,options", FLIP_FREE + [("lscm", {})],
+                         ids=[m for m, _ in FLIP_FREE] + ["lscm"])
+def test_shared_meshes_no_flips(ext, scene, mesh, method, options):
+    obj = shared_mesh(mesh)
+    result, summary = unwrap(ext, [obj], method=method, **options)
+    assert result == {"FINISHED"}, summary
+    assert not summary.failed, summary.line()
+    check_result(ext, obj, summary,
+                 expect_no_flips=(method != "lscm" or mesh in LSCM_NO_FLIP_MESHES))
+
+
+@pytest.mark.parametrize("pack", [True, False])
+def test_unselected_faces_unchanged(ext, scene, pack):
+    obj = suzanne()
+    io = ext.mesh_io
+    sel = np.zeros(len(obj.data.polygons), dtype=bool)
+    sel[::3] = True
+    io.select_faces(obj.data, sel)
+    before = read(ext, obj)
+    result, summary = unwrap(ext, [obj], select_all=False, method="lscm", pack=pack)
+    assert result == {"FINISHED"}
+    after = read(ext, obj)
+    selected = io.read_face_selection(obj.data)
+    np.testing.assert_array_equal(selected, sel, err_msg="the face selection changed")
+    corners = corner_mask(sel, before.face_sizes)
+    assert np.array_equal(after.uv[~corners], before.uv[~corners]), "unselected UVs changed"
+    assert not np.array_equal(after.uv[corners], before.uv[corners])
+
+
+@pytest.mark.parametrize("pack", [True, False])
+def test_pinned_uvs_unchanged(ext, scene, pack):
+    obj = suzanne()
+    io = ext.mesh_io
+    data = read(ext, obj)
+    # pin every corner of two vertices of the same face (so of the same chart)
+    pinned_verts = data.corner_verts[[0, 2]]
+    pins = np.isin(data.corner_verts, pinned_verts)
+    io.write_pins(obj.data, io.active_uv_name(obj.data), pins)
+    result, summary = unwrap(ext, [obj], method="lscm", pack=pack)
+    assert result == {"FINISHED"}, summary
+    after = read(ext, obj)
+    assert np.array_equal(after.uv[pins], data.uv[pins]), "pinned UVs moved"
+    assert np.array_equal(io.read_pins(obj.data), pins), "pin flags changed"
+
+
+def _cube(name="Cube"):
+    bpy.ops.mesh.primitive_cube_add()
+    obj = bpy.context.active_object
+    obj.name = name
+    io = common.mesh_io()
+    io.write_seams(obj.data, np.zeros(len(obj.data.edges), dtype=bool))
+    return obj
+
+
+def test_closed_cube_without_seams(ext, scene):
+    """Either the core cuts the closed chart itself, or the chart fails and keeps its UVs."""
+    obj = _cube()
+    before = read(ext, obj)
+    result, summary = unwrap(ext, [obj], method="lscm")
+    assert result == {"FINISHED"}
+    after = read(ext, obj)
+    res = summary.results[obj.name]
+    failed = ~np.asarray(res.face_solved, dtype=bool)
+    corners = corner_mask(failed, before.face_sizes)
+    assert np.array_equal(after.uv[corners], before.uv[corners]), "a failed chart's UVs changed"
+    if failed.any():
+        assert summary.failed and "not solved" in summary.line()
+    else:
+        chart = np.asarray(res.chart)
+        assert flipped_triangles(after, chart) == 0
+
+
+def test_failed_chart_keeps_uvs_exactly(ext, scene, monkeypatch):
+    """A chart reported as failed keeps its old UVs bit for bit, the others are written."""
+    import uvflat
+
+    real = uvflat.unwrap
+
+    def unwrap_with_failure(*args, **kwargs):
+        r = real(*args, **kwargs)
+        chart = np.asarray(r.chart)
+        solved = np.asarray(r.face_solved, dtype=bool) & (chart != 0)
+        charts = [SimpleNamespace(**{**c.as_dict(), "status": "failed", "reason": "test failure"})
+                  if c.id == 0 else c for c in r.charts]
+        return SimpleNamespace(uv=np.asarray(r.uv), chart=chart, face_solved=solved,
+                               charts=charts, seconds=r.seconds)
+
+    monkeypatch.setattr(uvflat, "unwrap", unwrap_with_failure)
+    obj = suzanne()
+    before = read(ext, obj)
+    result, summary = unwrap(ext, [obj], method="lscm", pack=True)
+    assert result == {"FINISHED"}
+    assert any(p.reason == "test failure" for p in summary.failed), summary.line()
+    after = read(ext, obj)
+    res = summary.results[obj.name]
+    chart = np.asarray(res.chart)
+    failed_corners = corner_mask(chart == 0, before.face_sizes)
+    assert np.array_equal(after.uv[failed_corners], before.uv[failed_corners])
+    solved = corner_mask(np.asarray(res.face_solved, dtype=bool), before.face_sizes)
+    assert solved.any() and not (solved & failed_corners).any()
+    assert not np.array_equal(after.uv[solved], before.uv[solved])
+
+
+@pytest.mark.parametrize("stage", ["solve", "pack"])
+def test_error_leaves_every_uv_map_unchanged(ext, scene, monkeypatch, stage):
+    import uvflat
+
+    with_uv = suzanne("WithUV")
+    io = ext.mesh_io
+    io.write_seams(with_uv.data, np.zeros(len(with_uv.data.edges), dtype=bool))
+    second = with_uv.data.uv_layers.new(name="Second")
+    with_uv.data.uv_layers.active = second
+    without_uv = common.link_mesh_object("NoUV", io.new_mesh("NoUV", *read_shape_ngon()))
+    before = {o.name: {n: io.read_uv(o.data, n).copy() for n in io.uv_map_names(o.data)}
+              for o in (with_uv, without_uv)}
+    if stage == "solve":
+        calls = []
+
+        def failing_unwrap(*args, **kwargs):
+            calls.append(1)
+            if len(calls) == 2:
+                raise uvflat.UvflatError("injected failure")
+            return uvflat_real(*args, **kwargs)
+
+        uvflat_real = uvflat.unwrap
+        monkeypatch.setattr(uvflat, "unwrap", failing_unwrap)
+    else:
+        def failing_pack(*args, **kwargs):
+            raise RuntimeError("injected packing failure")
+
+        monkeypatch.setattr(ext.engine, "_pack", failing_pack)
+    with pytest.raises(RuntimeError, match="injected"):
+        unwrap(ext, [with_uv, without_uv], method="lscm", pack=True)
+    for o in (with_uv, without_uv):
+        assert io.uv_map_names(o.data) == list(before[o.name]), f"{o.name}: UV maps added/removed"
+        for name, uv in before[o.name].items():
+            assert np.array_equal(io.read_uv(o.data, name), uv), f"{o.name}/{name} changed"
+    assert with_uv.data.uv_layers.active.name == "Second"
+
+
+def read_shape_ngon():
+    """A flat disk of n-gons: a hexagon fan of pentagons around a central hexagon."""
+    ring_in = np.array([[np.cos(a), np.sin(a), 0.0] for a in np.arange(6) * np.pi / 3])
+    ring_out = 2.2 * np.array([[np.cos(a), np.sin(a), 0.0] for a in (np.arange(6) + 0.5) * np.pi / 3])
+    positions = np.vstack([ring_in, ring_out, 2.0 * ring_in])
+    faces = [list(range(6))]  # counter-clockwise seen from +z
+    for i in range(6):
+        j = (i + 1) % 6
+        faces.append([i, 12 + i, 6 + i, 12 + j, j])
+    return positions, np.concatenate(faces), np.array([len(f) for f in faces])
+
+
+@pytest.mark.parametrize("method", ["tutte", "lscm", "harmonic", "spectral"])
+def test_ngons(ext, scene, method):
+    io = ext.mesh_io
+    obj = common.link_mesh_object("Ngons", io.new_mesh("Ngons", *read_shape_ngon()))
+    bpy.ops.mesh.primitive_cylinder_add(vertices=12, end_fill_type="NGON")
+    cyl = bpy.context.active_object
+    data = read(ext, cyl)
+    edge_verts, _ = io.read_edges(cyl.data)
+    z = data.positions[:, 2]
+    ring = (np.abs(z[edge_verts[:, 0]] - z[edge_verts[:, 1]]) < 1e-6)  # cap boundary edges
+    vertical = np.flatnonzero(~ring)[:1]  # one side edge opens the tube
+    seam = ring.copy()
+    seam[vertical] = True
+    io.write_seams(cyl.data, seam)
+    assert data.face_sizes.max() == 12 and read(ext, obj).face_sizes.max() == 6
+    result, summary = unwrap(ext, [obj, cyl], method=method)
+    assert result == {"FINISHED"}, summary
+    assert summary.objects == 2 and not summary.failed, summary.line()
+    for o in (obj, cyl):
+        check_result(ext, o, summary)
+
+
+def test_multi_object_edit_mode(ext, scene):
+    a = suzanne("A")
+    b = suzanne("B")
+    b.location.x = 3.0
+    if SHARED.is_dir():
+        c = common.load_mesh_object(SHARED / "halftunnel.off")
+        objects = [a, b, c]
+    else:
+        objects = [a, b]
+    before = {o.name: read(ext, o).uv for o in objects}
+    result, summary = unwrap(ext, objects, method="tutte")
+    assert result == {"FINISHED"}
+    assert summary.objects == len(objects), summary.line()
+    for o in objects:
+        data = check_result(ext, o, summary, expect_all_solved=False)
+        assert not np.array_equal(data.uv, before[o.name]), f"{o.name} was not unwrapped"
+
+
+def test_pack_off_keeps_islands_near(ext, scene):
+    obj = suzanne()
+    before = read(ext, obj)
+    result, summary = unwrap(ext, [obj], method="lscm", pack=False)
+    assert result == {"FINISHED"}
+    after = read(ext, obj)
+    chart = np.asarray(summary.results[obj.name].chart)
+    for k in np.unique(chart[chart >= 0]):
+        corners = corner_mask(chart == k, before.face_sizes)
+        old, new = before.uv[corners], after.uv[corners]
+        old_c, new_c = (old.min(0) + old.max(0)) / 2, (new.min(0) + new.max(0)) / 2
+        old_d, new_d = np.linalg.norm(np.ptp(old, 0)), np.linalg.norm(np.ptp(new, 0))
+        assert np.linalg.norm(new_c - old_c) <= 0.5 * old_d, f"chart {k} moved away"
+        assert 0.25 * old_d <= new_d <= 4.0 * old_d, f"chart {k} rescaled {new_d / old_d:.2f}x"
+
+
+def test_creates_uv_map_when_missing(ext, scene):
+    io = ext.mesh_io
+    obj = common.link_mesh_object("Ngons", io.new_mesh("Ngons", *read_shape_ngon()))
+    assert io.active_uv_name(obj.data) is None
+    result, summary = unwrap(ext, [obj], method="tutte", boundary="square")
+    assert result == {"FINISHED"}
+    assert io.active_uv_name(obj.data) == "UVMap"
+    check_result(ext, obj, summary)
+
+
+def test_scene_defaults_panel_properties(ext, scene):
+    defaults = bpy.context.scene.uvflat
+    defaults.method = "spectral"
+    defaults.max_iterations = 321
+    names = ext.methods.SETTING_NAMES
+    assert {"method", "pack", "margin", "boundary", "max_iterations"} <= set(names)
+    assert ext.methods.core_options(defaults) == {"max_iterations": 321, "tolerance": 1e-10}
