@@ -3,6 +3,7 @@
 //! Every method maps one [`Chart`] to per-chart-vertex UVs. Charts that no method can map
 //! (closed, higher genus, defects found while building the chart) fail here with a reason.
 
+pub mod abf;
 pub mod fixed_boundary;
 pub mod harmonic;
 pub mod lscm;
@@ -54,6 +55,9 @@ pub enum Method {
     Lscm,
     /// Mullen et al. 2008: spectral conformal, free boundary, no pins.
     Spectral(SpectralOptions),
+    /// Sheffer & de Sturler 2001 / Sheffer et al. 2005: angle based flattening (ABF++ by
+    /// default), UVs by LSCM from the solved angles; falls back to LSCM when it fails.
+    Abf(abf::AbfOptions),
 }
 
 /// A value of a method option as it arrives from Python, the add-on or a command line.
@@ -67,7 +71,7 @@ pub enum OptionValue {
 
 /// Names accepted by [`Method::parse`].
 pub fn method_names() -> &'static [&'static str] {
-    &["tutte", "harmonic", "mean_value", "lscm", "spectral"]
+    &["tutte", "harmonic", "mean_value", "lscm", "spectral", "abf"]
 }
 
 fn opt_err(name: &'static str, reason: impl Into<String>) -> UvError {
@@ -101,6 +105,7 @@ impl Method {
     pub fn parse(name: &str, options: &[(String, OptionValue)]) -> Result<Method> {
         let mut boundary = BoundaryShape::Circle;
         let mut spectral = SpectralOptions::default();
+        let mut abf_opts = abf::AbfOptions::default();
         let fixed = matches!(name, "tutte" | "harmonic" | "mean_value");
         for (key, value) in options {
             match (key.as_str(), name) {
@@ -113,6 +118,22 @@ impl Method {
                 }
                 ("max_iterations", "spectral") => spectral.max_iterations = as_count("max_iterations", value)?,
                 ("tolerance", "spectral") => spectral.tolerance = as_float("tolerance", value)?,
+                ("solver", "abf") => {
+                    abf_opts.solver = match value {
+                        OptionValue::Str(s) if s == "abf++" => abf::AbfSolver::AbfPlusPlus,
+                        OptionValue::Str(s) if s == "abf" => abf::AbfSolver::Plain,
+                        other => return Err(opt_err("solver", format!("expected \"abf++\" or \"abf\", got {other:?}"))),
+                    }
+                }
+                ("max_iterations", "abf") => abf_opts.max_iterations = as_count("max_iterations", value)?,
+                ("tolerance", "abf") => abf_opts.tolerance = as_float("tolerance", value)?,
+                ("boundary", "abf") => {
+                    abf_opts.boundary = match value {
+                        OptionValue::Str(s) if s == "free" => abf::AbfBoundary::Free,
+                        OptionValue::Str(s) if s == "convex" => abf::AbfBoundary::Convex,
+                        other => return Err(opt_err("boundary", format!("expected \"free\" or \"convex\", got {other:?}"))),
+                    }
+                }
                 _ => {
                     if !method_names().contains(&name) {
                         break;
@@ -130,6 +151,7 @@ impl Method {
             "mean_value" => Method::MeanValue { boundary },
             "lscm" => Method::Lscm,
             "spectral" => Method::Spectral(spectral),
+            "abf" => Method::Abf(abf_opts),
             other => {
                 return Err(opt_err("method", format!("unknown method {other:?}; expected one of {:?}", method_names())))
             }
@@ -146,12 +168,21 @@ impl Method {
             Method::MeanValue { .. } => "mean_value",
             Method::Lscm => "lscm",
             Method::Spectral(_) => "spectral",
+            Method::Abf(_) => "abf",
         }
     }
 
     /// Check option values (also done by [`Method::parse`]).
     pub fn validate(&self) -> Result<()> {
         if let Method::Spectral(o) = self {
+            if !(o.tolerance > 0.0 && o.tolerance.is_finite()) {
+                return Err(opt_err("tolerance", format!("must be a positive number, got {}", o.tolerance)));
+            }
+            if o.max_iterations == 0 {
+                return Err(opt_err("max_iterations", "must be at least 1"));
+            }
+        }
+        if let Method::Abf(o) = self {
             if !(o.tolerance > 0.0 && o.tolerance.is_finite()) {
                 return Err(opt_err("tolerance", format!("must be a positive number, got {}", o.tolerance)));
             }
@@ -238,6 +269,7 @@ pub fn solve(method: &Method, chart: &Chart, pins: &[(u32, [f64; 2])]) -> std::r
         Method::MeanValue { boundary } => mean_value::solve(chart, pins, *boundary),
         Method::Lscm => lscm::solve(chart, pins),
         Method::Spectral(o) => spectral::solve(chart, pins, o),
+        Method::Abf(o) => abf::solve(chart, pins, o),
     }?;
     if let Some(i) = sol.uv.iter().position(|p| !p[0].is_finite() || !p[1].is_finite()) {
         return Err(ChartFailure(format!("the solve produced a non-finite UV at mesh vertex {}", chart.mesh_vertex[i])));
