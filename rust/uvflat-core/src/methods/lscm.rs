@@ -20,6 +20,7 @@
 use super::{chart_angles, ChartFailure, ChartSolution};
 use crate::charts::Chart;
 use crate::solvers::{FixedValueSolver, Symmetry};
+use faer::c64;
 
 /// Triplets of the LSCM quadratic form (twice the conformal energy E_D − A) over interleaved unknowns `[u0, v0, u1, v1, …]`
 /// (size `2n`), assembled per triangle from corner angles. Symmetric positive semidefinite by
@@ -62,6 +63,33 @@ pub fn conformal_triplets(triangles: &[[u32; 3]], angles: &[[f64; 3]]) -> Vec<(u
     out
 }
 
+/// The LSCM energy as a Hermitian form `w* H w` in `w = u + iv` (n × n, lower triangle only):
+/// the same energy as [`conformal_triplets`] in half the dimension, which is what
+/// [`LscmSolver`] factors.
+pub fn conformal_hermitian(triangles: &[[u32; 3]], angles: &[[f64; 3]]) -> Vec<(u32, u32, c64)> {
+    let mut out = Vec::with_capacity(triangles.len() * 6);
+    for (t, a) in triangles.iter().zip(angles) {
+        let k = (0..3).max_by(|&i, &j| a[i].total_cmp(&a[j])).unwrap();
+        let r = (k + 1) % 3;
+        let v = [t[r], t[(r + 1) % 3], t[(r + 2) % 3]];
+        let al = [a[r], a[(r + 1) % 3], a[(r + 2) % 3]];
+        let (s0, s1, s2) = (al[0].sin(), al[1].sin(), al[2].sin());
+        let ratio = s1 / s2;
+        let q = c64::new(ratio * al[0].cos(), ratio * al[0].sin());
+        let w = s2 / (2.0 * s0 * s1);
+        let c = [q - c64::new(1.0, 0.0), -q, c64::new(1.0, 0.0)];
+        for i in 0..3 {
+            for j in 0..3 {
+                if v[i] >= v[j] {
+                    // Row i, column j of Σ κ c̄ cᵀ.
+                    out.push((v[i], v[j], c[i].conj() * c[j] * w));
+                }
+            }
+        }
+    }
+    out
+}
+
 /// Two vertices to pin when the user pinned none: the boundary vertices (all vertices for a
 /// chart without boundary) extremal along the longest axis of the chart's bounding box, with
 /// UVs `(0, 0)` and `(d, 0)`, `d` their 3D distance. Ties go to the smaller mesh vertex.
@@ -94,9 +122,10 @@ pub fn auto_pins(chart: &Chart) -> [(u32, [f64; 2]); 2] {
 }
 
 /// A factored LSCM system for one chart and one set of pinned vertices: solve again for new
-/// pin positions without refactoring (live unwrap while dragging pins).
+/// pin positions without refactoring (live unwrap while dragging pins). Works on the complex
+/// Hermitian form ([`conformal_hermitian`]).
 pub struct LscmSolver {
-    solver: FixedValueSolver,
+    solver: FixedValueSolver<c64>,
     pinned: Vec<u32>,
     n: usize,
 }
@@ -105,18 +134,17 @@ impl LscmSolver {
     /// Assemble and factor the LSCM system of `triangles` (over `n` vertices) with the given
     /// corner `angles` and `pinned` vertices (at least two, distinct).
     pub fn new(n: usize, triangles: &[[u32; 3]], angles: &[[f64; 3]], pinned: &[u32]) -> Result<Self, ChartFailure> {
-        let trip = conformal_triplets(triangles, angles);
-        let fixed: Vec<u32> = pinned.iter().flat_map(|&v| [2 * v, 2 * v + 1]).collect();
-        let solver = FixedValueSolver::new(2 * n, &trip, &fixed, Symmetry::Symmetric)?;
+        let trip = conformal_hermitian(triangles, angles);
+        let solver = FixedValueSolver::new(n, &trip, pinned, Symmetry::Symmetric)?;
         Ok(LscmSolver { solver, pinned: pinned.to_vec(), n })
     }
 
     /// UVs for the pinned vertices at `pin_uvs` (same order as `pinned`).
     pub fn solve(&self, pin_uvs: &[[f64; 2]]) -> Result<Vec<[f64; 2]>, ChartFailure> {
         assert_eq!(pin_uvs.len(), self.pinned.len());
-        let vals: Vec<f64> = pin_uvs.iter().flat_map(|p| [p[0], p[1]]).collect();
+        let vals: Vec<c64> = pin_uvs.iter().map(|p| c64::new(p[0], p[1])).collect();
         let x = self.solver.solve(&[vals], &[])?;
-        Ok((0..self.n).map(|i| [x[0][2 * i], x[0][2 * i + 1]]).collect())
+        Ok((0..self.n).map(|i| [x[0][i].re, x[0][i].im]).collect())
     }
 }
 
@@ -191,5 +219,16 @@ mod tests {
         }
         let expected = 2.0 * (e_dirichlet - crate::geometry::signed_area_2d(w));
         assert!((e_form - expected).abs() < 1e-12, "{e_form} vs {expected}");
+        // The Hermitian form gives the same energy: w* H w with H from the lower triangle.
+        let z: Vec<c64> = w.iter().map(|p| c64::new(p[0], p[1])).collect();
+        let h = conformal_hermitian(&[[0, 1, 2]], &[a]);
+        let mut e_h = c64::new(0.0, 0.0);
+        for &(i, j, v) in &h {
+            e_h += z[i as usize].conj() * v * z[j as usize];
+            if i != j {
+                e_h += z[j as usize].conj() * v.conj() * z[i as usize];
+            }
+        }
+        assert!((e_h.re - e_form).abs() < 1e-12 && e_h.im.abs() < 1e-12, "{e_h} vs {e_form}");
     }
 }

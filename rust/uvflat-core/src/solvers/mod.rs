@@ -3,7 +3,7 @@
 
 mod quadratic;
 
-pub use quadratic::{FixedValueSolver, Symmetry};
+pub use quadratic::{FixedValueSolver, Scalar, Symmetry};
 
 /// Why a linear solve failed. Turned into a chart failure reason by the methods.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

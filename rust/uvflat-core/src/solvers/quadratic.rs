@@ -13,6 +13,9 @@
 //! * new fixed values or a new `b` cost one solve ([`FixedValueSolver::solve`]), and
 //! * new matrix values on the same pattern cost one numeric refactorisation
 //!   ([`FixedValueSolver::refactor`]) — the pattern of ARAP/SLIM global steps.
+//!
+//! The scalar is `f64` by default or [`faer::c64`]: a complex Hermitian `Q` (conformal
+//! energies are Hermitian forms in `w = u + iv`) halves the dimension of the real system.
 
 use faer::linalg::solvers::Solve;
 use faer::sparse::linalg::solvers::{Llt, Lu, SymbolicLlt, SymbolicLu};
@@ -21,12 +24,56 @@ use faer::{Mat, Side};
 
 use super::SolveError;
 
+/// The scalars the solver works in: `f64`, or `c64` for Hermitian problems.
+pub trait Scalar:
+    faer::traits::ComplexField
+    + Copy
+    + Send
+    + Sync
+    + PartialEq
+    + std::fmt::Debug
+    + std::ops::Mul<Output = Self>
+    + std::ops::SubAssign
+    + 'static
+{
+    /// Additive identity.
+    fn zero_value() -> Self;
+    /// Complex conjugate (identity for reals).
+    fn conjugate(self) -> Self;
+    /// Neither NaN nor infinite.
+    fn finite(self) -> bool;
+}
+
+impl Scalar for f64 {
+    fn zero_value() -> Self {
+        0.0
+    }
+    fn conjugate(self) -> Self {
+        self
+    }
+    fn finite(self) -> bool {
+        self.is_finite()
+    }
+}
+
+impl Scalar for faer::c64 {
+    fn zero_value() -> Self {
+        faer::c64::new(0.0, 0.0)
+    }
+    fn conjugate(self) -> Self {
+        self.conj()
+    }
+    fn finite(self) -> bool {
+        self.re.is_finite() && self.im.is_finite()
+    }
+}
+
 /// Whether `Q` is symmetric (Cholesky) or general (LU).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Symmetry {
-    /// `Q` symmetric positive (semi)definite; `Q_FF` must be positive definite. Give the lower
-    /// triangle only (row ≥ column): an entry (r, c) stands for (c, r) too, and entries above
-    /// the diagonal are ignored.
+    /// `Q` symmetric (Hermitian for complex scalars) positive (semi)definite; `Q_FF` must be
+    /// positive definite. Give the lower triangle only (row ≥ column): an entry (r, c) stands
+    /// for (c, r) too (conjugated), and entries above the diagonal are ignored.
     Symmetric,
     /// `Q` general; `Q_FF` must be non-singular.
     General,
@@ -37,9 +84,9 @@ enum Symbolic {
     Lu(SymbolicLu<usize>),
 }
 
-enum Factor {
-    Llt(Llt<usize, f64>),
-    Lu(Lu<usize, f64>),
+enum Factor<T> {
+    Llt(Llt<usize, T>),
+    Lu(Lu<usize, T>),
 }
 
 /// Where an input triplet goes.
@@ -49,12 +96,14 @@ enum Slot {
     FreeFree(u32),
     /// Entry of `Q_FC`: (free row, fixed column position).
     FreeFixed(u32, u32),
+    /// Upper-triangle entry of `Q_FC` given by its lower mirror: use the conjugate.
+    FreeFixedConj(u32, u32),
     /// Row of a fixed unknown, or upper triangle of a symmetric matrix: unused.
     Unused,
 }
 
 /// The quadratic-with-fixed-values solver (see the module docs).
-pub struct FixedValueSolver {
+pub struct FixedValueSolver<T: Scalar = f64> {
     n: usize,
     symmetry: Symmetry,
     free: Vec<u32>,
@@ -62,20 +111,20 @@ pub struct FixedValueSolver {
     slots: Vec<Slot>,
     ff_symbolic: SymbolicSparseColMat<usize>,
     ff_argsort: faer::sparse::Argsort<usize>,
-    ff_values: Vec<f64>,
-    coupling: Vec<(u32, u32, f64)>,
+    ff_values: Vec<T>,
+    coupling: Vec<(u32, u32, T)>,
     symbolic: Symbolic,
-    factor: Option<Factor>,
+    factor: Option<Factor<T>>,
 }
 
-impl FixedValueSolver {
+impl<T: Scalar> FixedValueSolver<T> {
     /// Analyse and factor `Q_FF` for the matrix given as triplets `(row, col, value)`
     /// (duplicates are summed) with the unknowns `fixed` held at values given later.
     ///
     /// Preconditions: indices `< n`; `fixed` without duplicates. Failures:
     /// [`SolveError::NotPositiveDefinite`] / [`SolveError::Singular`] when `Q_FF` cannot be
     /// factored, [`SolveError::Other`] on allocation failure.
-    pub fn new(n: usize, triplets: &[(u32, u32, f64)], fixed: &[u32], symmetry: Symmetry) -> Result<Self, SolveError> {
+    pub fn new(n: usize, triplets: &[(u32, u32, T)], fixed: &[u32], symmetry: Symmetry) -> Result<Self, SolveError> {
         let mut free_pos = vec![0u32; n];
         for &c in fixed {
             free_pos[c as usize] = u32::MAX;
@@ -98,7 +147,7 @@ impl FixedValueSolver {
             let slot = match symmetry {
                 // Lower triangle only; an entry (r, c) also stands for (c, r).
                 Symmetry::Symmetric if r < c => Slot::Unused,
-                Symmetry::Symmetric if fr == u32::MAX && fc != u32::MAX => Slot::FreeFixed(fc, fixed_pos[r as usize]),
+                Symmetry::Symmetric if fr == u32::MAX && fc != u32::MAX => Slot::FreeFixedConj(fc, fixed_pos[r as usize]),
                 _ if fr == u32::MAX => Slot::Unused,
                 _ if fc == u32::MAX => Slot::FreeFixed(fr, fixed_pos[c as usize]),
                 _ => {
@@ -127,12 +176,12 @@ impl FixedValueSolver {
             slots,
             ff_symbolic,
             ff_argsort,
-            ff_values: vec![0.0; pairs.len()],
+            ff_values: vec![T::zero_value(); pairs.len()],
             coupling: Vec::new(),
             symbolic,
             factor: None,
         };
-        let values: Vec<f64> = triplets.iter().map(|t| t.2).collect();
+        let values: Vec<T> = triplets.iter().map(|t| t.2).collect();
         solver.refactor(&values)?;
         Ok(solver)
     }
@@ -140,13 +189,14 @@ impl FixedValueSolver {
     /// Numeric refactorisation for new values on the same triplet pattern (same length and
     /// order as the triplets given to [`FixedValueSolver::new`]); the symbolic analysis is
     /// reused.
-    pub fn refactor(&mut self, values: &[f64]) -> Result<(), SolveError> {
+    pub fn refactor(&mut self, values: &[T]) -> Result<(), SolveError> {
         assert_eq!(values.len(), self.slots.len(), "refactor needs one value per original triplet");
         self.coupling.clear();
         for (slot, &v) in self.slots.iter().zip(values) {
             match *slot {
                 Slot::FreeFree(k) => self.ff_values[k as usize] = v,
                 Slot::FreeFixed(r, c) => self.coupling.push((r, c, v)),
+                Slot::FreeFixedConj(r, c) => self.coupling.push((r, c, v.conjugate())),
                 Slot::Unused => {}
             }
         }
@@ -184,10 +234,10 @@ impl FixedValueSolver {
     /// Solve for several right-hand sides at once. Column `k` has fixed values
     /// `fixed_values[k]` (one per fixed unknown) and linear term `b[k]` (length n, or empty
     /// for zero). Returns the full solution vectors (fixed unknowns hold their values).
-    pub fn solve(&self, fixed_values: &[Vec<f64>], b: &[Vec<f64>]) -> Result<Vec<Vec<f64>>, SolveError> {
+    pub fn solve(&self, fixed_values: &[Vec<T>], b: &[Vec<T>]) -> Result<Vec<Vec<T>>, SolveError> {
         let k = fixed_values.len();
         let nf = self.free.len();
-        let mut rhs = Mat::<f64>::zeros(nf, k);
+        let mut rhs = Mat::<T>::from_fn(nf, k, |_, _| T::zero_value());
         for col in 0..k {
             if let Some(bc) = b.get(col) {
                 if !bc.is_empty() {
@@ -198,7 +248,8 @@ impl FixedValueSolver {
             }
             let xc = &fixed_values[col];
             for &(r, c, v) in &self.coupling {
-                rhs[(r as usize, col)] -= v * xc[c as usize];
+                let prod = v * xc[c as usize];
+                rhs[(r as usize, col)] -= prod;
             }
         }
         match &self.factor {
@@ -208,10 +259,10 @@ impl FixedValueSolver {
         }
         let mut out = Vec::with_capacity(k);
         for col in 0..k {
-            let mut x = vec![0.0; self.n];
+            let mut x = vec![T::zero_value(); self.n];
             for (i, &g) in self.free.iter().enumerate() {
                 let v = rhs[(i, col)];
-                if !v.is_finite() {
+                if !v.finite() {
                     return Err(SolveError::NonFinite);
                 }
                 x[g as usize] = v;
