@@ -753,3 +753,16 @@ def test_real_bad_input_never_crashes(name):
     else:
         assert r.uv.shape == (len(cv), 2)
         assert np.all(np.isfinite(r.uv))
+
+
+def test_factorization_seconds_is_defined_for_the_linear_methods_only():
+    positions, corner_verts, face_sizes = grid(12, 9)
+    for method in ("tutte", "harmonic", "mean_value", "lscm"):
+        t = uvflat.factorization_seconds(positions, corner_verts, face_sizes, method=method)
+        assert isinstance(t, float) and t > 0.0, method
+    assert uvflat.factorization_seconds(positions, corner_verts, face_sizes, method="spectral") is None
+    # Unselected or unmappable charts are skipped: nothing selected, nothing factored.
+    none = np.zeros(len(face_sizes), dtype=bool)
+    assert uvflat.factorization_seconds(positions, corner_verts, face_sizes, selected=none) == 0.0
+    with pytest.raises(uvflat.SeamError):
+        uvflat.factorization_seconds(positions, corner_verts, face_sizes, seams=[[0, 10**6]])

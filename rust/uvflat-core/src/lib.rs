@@ -15,6 +15,7 @@
 
 pub mod charts;
 pub mod error;
+mod factor_timing;
 pub mod geometry;
 pub mod mesh;
 pub mod methods;
@@ -23,6 +24,7 @@ pub mod solvers;
 mod unwrap;
 
 pub use error::{Result, UvError};
+pub use factor_timing::factorization_seconds;
 pub use methods::{method_names, BoundaryShape, Method, OptionValue, SpectralOptions};
 pub use metrics::{Distortion, MeshMetrics};
 pub use unwrap::{unwrap, ChartKind, ChartReport, ChartStatus, Fit, MeshInput, UnwrapOptions, Unwrapped};

@@ -130,6 +130,58 @@ fn read_options(py: Python<'_>, options: Option<&Bound<'_, PyDict>>) -> PyResult
     Ok(out)
 }
 
+/// Seam vertex pairs `(E, 2)`, typed errors naming the seam.
+fn read_seams(py: Python<'_>, seams: Option<&Bound<'_, PyAny>>, n_vertices: usize) -> PyResult<Vec<[u32; 2]>> {
+    Ok(match seams.filter(|s| !s.is_none()) {
+        None => Vec::new(),
+        Some(s) => {
+            let (flat, _) = indices(s, "seams", Layout::Rows("E", 2), |i, vertex| {
+                let seam = i / 2;
+                error(
+                    py,
+                    Kind::Seam,
+                    format!("seam {seam}: vertex index {vertex} out of range (mesh has {n_vertices} vertices)"),
+                    attrs![py; "seam" => seam, "vertex" => vertex, "n_vertices" => n_vertices],
+                )
+            })?;
+            convert::rows::<2, u32>(&flat)
+        }
+    })
+}
+
+/// Seconds of one sparse factorization (symbolic analysis + numeric) of each chart's own
+/// linear system for a linear method, summed over the mappable charts; `None` for methods
+/// that are not one linear solve. The yardstick for the linear methods' unwrap time.
+#[pyfunction]
+#[pyo3(signature = (positions, corner_verts, face_sizes, *, method = "lscm", seams = None, selected = None, **options))]
+fn factorization_seconds(
+    py: Python<'_>,
+    positions: &Bound<'_, PyAny>,
+    corner_verts: &Bound<'_, PyAny>,
+    face_sizes: &Bound<'_, PyAny>,
+    method: &str,
+    seams: Option<&Bound<'_, PyAny>>,
+    selected: Option<&Bound<'_, PyAny>>,
+    options: Option<&Bound<'_, PyDict>>,
+) -> PyResult<Option<f64>> {
+    let opts = read_options(py, options)?;
+    let method = Method::parse(method, &opts).map_err(|e| map_uv_error(py, e, "fit_to"))?;
+    let soup = read_soup(positions, corner_verts, face_sizes)?;
+    let seams = read_seams(py, seams, soup.positions.len())?;
+    let selected = read_selected(selected)?;
+    run_core(py, "fit_to", || {
+        let input = MeshInput {
+            positions: &soup.positions,
+            corner_verts: &soup.corner_verts,
+            face_sizes: &soup.face_sizes,
+            seams: &seams,
+            selected: selected.as_deref(),
+            pins: &[],
+        };
+        uvflat_core::factorization_seconds(&input, &method)
+    })
+}
+
 /// Unwrap the selected faces of a polygon mesh into per-corner UVs.
 ///
 /// See the package documentation (`uvflat.unwrap`) for the arguments.
@@ -156,21 +208,7 @@ fn unwrap(
     let n_vertices = soup.positions.len();
     let n_corners = soup.corner_verts.len();
 
-    let seams: Vec<[u32; 2]> = match seams.filter(|s| !s.is_none()) {
-        None => Vec::new(),
-        Some(s) => {
-            let (flat, _) = indices(s, "seams", Layout::Rows("E", 2), |i, vertex| {
-                let seam = i / 2;
-                error(
-                    py,
-                    Kind::Seam,
-                    format!("seam {seam}: vertex index {vertex} out of range (mesh has {n_vertices} vertices)"),
-                    attrs![py; "seam" => seam, "vertex" => vertex, "n_vertices" => n_vertices],
-                )
-            })?;
-            convert::rows::<2, u32>(&flat)
-        }
-    };
+    let seams = read_seams(py, seams, n_vertices)?;
     let selected = read_selected(selected)?;
 
     let pins = pins.filter(|p| !p.is_none());
@@ -282,6 +320,7 @@ fn _uvflat(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
     m.add_function(wrap_pyfunction!(unwrap, m)?)?;
     m.add_function(wrap_pyfunction!(metrics, m)?)?;
+    m.add_function(wrap_pyfunction!(factorization_seconds, m)?)?;
     m.add_function(wrap_pyfunction!(_internal_panic_check, m)?)?;
     m.add_class::<PyUnwrapResult>()?;
     m.add_class::<PyChartReport>()?;

@@ -32,6 +32,7 @@ from ._uvflat import (
     UvflatError,
     VertexIndexError,
     __version__,
+    factorization_seconds,
     metrics,
     unwrap,
 )
@@ -52,6 +53,7 @@ __all__ = [
     "UvflatError",
     "VertexIndexError",
     "__version__",
+    "factorization_seconds",
     "metrics",
     "unwrap",
 ]

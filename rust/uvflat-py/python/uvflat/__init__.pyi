@@ -193,6 +193,24 @@ def unwrap(
         UvflatError: an internal error (a bug), never a crash.
     """
 
+def factorization_seconds(
+    positions: _Floats,
+    corner_verts: _Ints,
+    face_sizes: _Ints,
+    *,
+    method: str = "lscm",
+    seams: _Ints | None = None,
+    selected: _Bools | None = None,
+    **options: bool | int | float | str,
+) -> float | None:
+    """Seconds of one sparse factorization (symbolic analysis + numeric) of the linear system
+    each chart's unwrap solves with ``method``, summed over the charts that can be mapped.
+
+    ``None`` for methods that are not a single linear solve (only ``tutte``, ``harmonic``,
+    ``mean_value`` and ``lscm`` are). Assembly is not included: an unwrap that costs about
+    this much is dominated by the factorization.
+    """
+
 def metrics(
     positions: _Floats,
     corner_verts: _Ints,
