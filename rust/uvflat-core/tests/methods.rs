@@ -198,3 +198,24 @@ fn closed_and_degenerate_inputs_fail_per_chart_or_get_finite_uvs() {
         }
     }
 }
+
+#[test]
+fn spectral_converges_on_developable_charts_in_a_few_steps() {
+    // λ = 0 for a planar chart: the stopping test must not rely on relative eigenvalue change.
+    let quad = Soup {
+        positions: vec![[0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [2.0, 1.0, 0.0], [0.0, 1.0, 0.0]],
+        corner_verts: vec![0, 1, 2, 3],
+        face_sizes: vec![4],
+    };
+    let (cyl, seams) = cut_cylinder(32, 8, 1.0);
+    let mut cyl_input = cyl.input();
+    cyl_input.seams = &seams;
+    for input in [quad.input(), cyl_input] {
+        let r = unwrap(&input, &opts(Method::Spectral(SpectralOptions::default()))).unwrap();
+        let c = &r.charts[0];
+        assert_eq!(c.status, ChartStatus::Solved);
+        assert!(c.iterations <= 5, "{} iterations", c.iterations);
+        assert!(c.residual <= 1e-10, "{}", c.residual);
+        assert!(c.reason.is_none(), "{:?}", c.reason);
+    }
+}
