@@ -8,8 +8,9 @@
 //!
 //! Solved by inverse iteration on one sparse Cholesky factorization of `Q + εB` (ε small and
 //! relative to Q's diagonal): the shifted pencil has exactly the same eigenvectors, and
-//! B-orthogonality to the constants is preserved by the iteration. Converged when the B-norm
-//! change of the B-normalised iterate is below `tolerance`.
+//! B-orthogonality to the constants is preserved by the iteration. Converged when two
+//! successive B-normalised iterates differ by less than `tolerance` up to a rotation of the
+//! plane (the smallest eigenvalue comes as a rotation pair).
 //!
 //! Preconditions: a disk chart (holes allowed: all loops count as boundary). Pins: two or
 //! more pinned vertices at distinct UVs make the chart an LSCM solve with those pins (the
@@ -117,7 +118,23 @@ pub fn solve(chart: &Chart, pins: &[(u32, [f64; 2])], options: &SpectralOptions)
         if !(project(&mut next) > 0.0) {
             return Err(ChartFailure("spectral: inverse iteration collapsed".into()));
         }
-        change = next.iter().zip(&x).zip(&b).map(|((p, q), w)| (p - q) * (p - q) * w).sum::<f64>().sqrt();
+        // Distance between the two iterates up to a rotation of the plane (the eigenvalue comes
+        // in a rotation pair, inside which the iterate may drift): with w = u + iv and both
+        // B-normalised, the residual of w_new after its projection c·w_old (c = Σ b w̄_old w_new)
+        // vanishes exactly when they differ by a rotation.
+        let (mut cr, mut ci) = (0.0, 0.0);
+        for i in 0..n {
+            let (uo, vo, un, vn) = (x[2 * i], x[2 * i + 1], next[2 * i], next[2 * i + 1]);
+            cr += b[2 * i] * (uo * un + vo * vn);
+            ci += b[2 * i] * (uo * vn - vo * un);
+        }
+        let mut d2 = 0.0;
+        for i in 0..n {
+            let (uo, vo, un, vn) = (x[2 * i], x[2 * i + 1], next[2 * i], next[2 * i + 1]);
+            let (ru, rv) = (un - (cr * uo - ci * vo), vn - (cr * vo + ci * uo));
+            d2 += b[2 * i] * (ru * ru + rv * rv);
+        }
+        change = d2.sqrt();
         x = next;
         if change <= options.tolerance {
             break;
