@@ -34,8 +34,24 @@ METHODS: tuple[MethodInfo, ...] = (
                "(Lévy et al. 2002)", ()),
     MethodInfo("spectral", "Spectral Conformal", "Conformal map from a generalized eigenproblem, "
                "free boundary (Mullen et al. 2008)", ("max_iterations", "tolerance_exponent")),
-    # Next: MethodInfo("abf", ...), MethodInfo("arap", ...), MethodInfo("slim", ...),
-    #       MethodInfo("mips", ...), MethodInfo("scaffold", ...)
+    MethodInfo("abf", "ABF++", "Angle based flattening: solves for the triangle angles under the "
+               "planarity constraints, then lays the chart out; free or convex boundary "
+               "(Sheffer & de Sturler 2001; Sheffer et al. 2005)",
+               ("abf_solver", "abf_boundary", "abf_max_iterations", "abf_tolerance_exponent")),
+    MethodInfo("arap", "ARAP", "As-rigid-as-possible: local/global iterations from LSCM towards "
+               "the closest isometry, free boundary; may fold triangles (Liu et al. 2008)",
+               ("arap_iterations", "arap_tolerance_exponent")),
+    MethodInfo("slim", "SLIM", "Symmetric Dirichlet energy (minimum stretch) from a flip-free "
+               "start with a flip-free line search; never flips a triangle "
+               "(Rabinovich et al. 2017)", ("slim_iterations", "slim_tolerance_exponent")),
+    MethodInfo("mips", "MIPS", "Most isometric parameterization energy (conformal), Newton "
+               "from a flip-free start with a flip-free line search, free boundary; never "
+               "flips a triangle (Hormann & Greiner 2000)",
+               ("mips_iterations", "mips_tolerance_exponent")),
+    MethodInfo("scaffold", "Scaffold (Bijective)", "Symmetric Dirichlet energy on the chart "
+               "plus a re-triangulated scaffold of the free space around it: no flipped "
+               "triangles and no self-overlapping island (Jiang et al. 2017)",
+               ("scaffold_iterations", "scaffold_tolerance_exponent")),
 )
 
 METHOD_BY_ID = {m.id: m for m in METHODS}
@@ -55,7 +71,10 @@ OPTIONS: dict[str, OptionInfo] = {
             name="Boundary",
             description="Shape the chart boundary is fixed to (by arc length)",
             items=(("circle", "Circle", "Boundary on the unit circle"),
-                   ("square", "Square", "Boundary on the unit square")),
+                   ("square", "Square", "Boundary on the unit square"),
+                   ("virtual", "Virtual", "A band of virtual triangles around the boundary goes "
+                                          "on the unit circle; the real boundary settles "
+                                          "freely inside it: less distortion (Lee et al. 2002)")),
             default="circle",
         ),
     ),
@@ -73,6 +92,120 @@ OPTIONS: dict[str, OptionInfo] = {
             name="Tolerance (10^x)",
             description="Convergence tolerance of the eigen solver, as a power of ten",
             default=-10, min=-16, max=-1,
+        ),
+        lambda exponent: 10.0 ** int(exponent),
+    ),
+    "abf_solver": OptionInfo(
+        "solver",
+        lambda: EnumProperty(
+            name="Solver",
+            description="Linear algebra of each Newton step",
+            items=(("abf++", "ABF++", "Block elimination onto the vertex constraints (fast)"),
+                   ("abf", "ABF", "The full constrained system by sparse LU (slow reference)")),
+            default="abf++",
+        ),
+    ),
+    "abf_boundary": OptionInfo(
+        "boundary",
+        lambda: EnumProperty(
+            name="Boundary",
+            description="Constraint on the angles of the chart's outer boundary",
+            items=(("free", "Free", "No constraint: the least angle distortion"),
+                   ("convex", "Convex", "Every outer boundary angle at most 180 degrees: a convex "
+                                        "outline")),
+            default="free",
+        ),
+    ),
+    "abf_max_iterations": OptionInfo(
+        "max_iterations",
+        lambda: IntProperty(
+            name="Iterations",
+            description="Maximum Newton iterations of the angle solve (a chart that does not "
+                        "converge falls back to LSCM)",
+            default=30, min=1, soft_max=200,
+        ),
+    ),
+    "abf_tolerance_exponent": OptionInfo(
+        "tolerance",
+        lambda: IntProperty(
+            name="Tolerance (10^x)",
+            description="Largest violation of the angle constraints accepted, as a power of ten",
+            default=-9, min=-14, max=-3,
+        ),
+        lambda exponent: 10.0 ** int(exponent),
+    ),
+    "arap_iterations": OptionInfo(
+        "max_iterations",
+        lambda: IntProperty(
+            name="Iterations",
+            description="Maximum local/global iterations",
+            default=100, min=1, soft_max=1000,
+        ),
+    ),
+    "arap_tolerance_exponent": OptionInfo(
+        "tolerance",
+        lambda: IntProperty(
+            name="Tolerance (10^x)",
+            description="Stop when the energy changes by less than this (relative), as a power "
+                        "of ten",
+            default=-6, min=-15, max=-1,
+        ),
+        lambda exponent: 10.0 ** int(exponent),
+    ),
+    "slim_iterations": OptionInfo(
+        "max_iterations",
+        lambda: IntProperty(
+            name="Iterations",
+            description="Maximum SLIM iterations (each one a reweighted solve and a flip-free "
+                        "line search)",
+            default=15, min=1, soft_max=500,
+        ),
+    ),
+    "slim_tolerance_exponent": OptionInfo(
+        "tolerance",
+        lambda: IntProperty(
+            name="Tolerance (10^x)",
+            description="Stop when the energy decreases by less than this (relative), as a "
+                        "power of ten",
+            default=-5, min=-15, max=-1,
+        ),
+        lambda exponent: 10.0 ** int(exponent),
+    ),
+    "mips_iterations": OptionInfo(
+        "max_iterations",
+        lambda: IntProperty(
+            name="Iterations",
+            description="Maximum Newton iterations (each one a projected-Hessian solve and a "
+                        "flip-free line search)",
+            default=50, min=1, soft_max=500,
+        ),
+    ),
+    "mips_tolerance_exponent": OptionInfo(
+        "tolerance",
+        lambda: IntProperty(
+            name="Tolerance (10^x)",
+            description="Stop when the energy decreases by less than this (relative), as a "
+                        "power of ten",
+            default=-6, min=-15, max=-1,
+        ),
+        lambda exponent: 10.0 ** int(exponent),
+    ),
+    "scaffold_iterations": OptionInfo(
+        "max_iterations",
+        lambda: IntProperty(
+            name="Iterations",
+            description="Maximum iterations (each one a scaffold rebuild, a reweighted solve "
+                        "and a flip-free line search)",
+            default=100, min=1, soft_max=1000,
+        ),
+    ),
+    "scaffold_tolerance_exponent": OptionInfo(
+        "tolerance",
+        lambda: IntProperty(
+            name="Tolerance (10^x)",
+            description="Stop when the energy decreases by less than this (relative), as a "
+                        "power of ten",
+            default=-6, min=-15, max=-1,
         ),
         lambda exponent: 10.0 ** int(exponent),
     ),

@@ -4,8 +4,9 @@
     .venv/bin/python blender_scripts/benchmark.py [--meshes camelhead,suzanne] \
         [--methods lscm,tutte] [--repeat 3] [--out bench.md]
 
-For every mesh (the files of ../shared/meshes and Blender's Suzanne with seams from her own UV
-islands) and every method, the whole operator call is timed, from ``bpy.ops...`` in edit mode
+For every mesh (the files of ../shared/meshes, Blender's Suzanne with seams from her own UV
+islands, and ``suzanne_subdiv2``: Suzanne with a subdivision surface modifier of two levels
+applied, seams from her subdivided UV islands) and every method, the whole operator call is timed, from ``bpy.ops...`` in edit mode
 to the UVs written (both sides pack their islands with Blender's packer).  Medians of
 ``--repeat`` runs.  Quality is measured by ``uvflat.metrics`` on the UVs read back from
 Blender, so both sides are measured by the same code.
@@ -58,7 +59,7 @@ def factorization_seconds(uvflat, positions, corner_verts, face_sizes, method, s
 
 
 def mesh_list(names):
-    available = {"suzanne": None}
+    available = {"suzanne": None, "suzanne_subdiv2": None}
     if common.SHARED_MESHES.is_dir():
         for path in sorted(common.SHARED_MESHES.iterdir()):
             if path.suffix.lower() in (".off", ".obj", ".ply"):
@@ -77,7 +78,7 @@ def load(name, path):
     common.reset_scene()
     common.load_addon()
     if path is None:
-        return common.suzanne()
+        return common.suzanne_subdivided(2) if name == "suzanne_subdiv2" else common.suzanne()
     return common.load_mesh_object(path)
 
 

@@ -131,6 +131,22 @@ def suzanne(name="Suzanne"):
     return obj
 
 
+def suzanne_subdivided(levels=2, name="SuzanneSubdiv"):
+    """Suzanne with a subdivision surface modifier of ``levels`` applied (her UV map is
+    subdivided with her), then seams marked from her UV islands."""
+    import bpy
+
+    bpy.ops.mesh.primitive_monkey_add()
+    obj = bpy.context.active_object
+    obj.name = name
+    modifier = obj.modifiers.new("Subdivision", "SUBSURF")
+    modifier.levels = levels
+    modifier.render_levels = levels
+    bpy.ops.object.modifier_apply(modifier=modifier.name)
+    seams_from_islands(obj)
+    return obj
+
+
 def seams_from_islands(obj):
     """Mark seams from the islands of ``obj``'s active UV map (Blender's own operator)."""
     import bpy

@@ -35,11 +35,15 @@ def parse_args(argv):
     parser.add_argument("output", type=Path, help=".obj, .glb or .blend")
     parser.add_argument("--method", default="lscm",
                         help="uvflat method (tutte, harmonic, mean_value, lscm, spectral, ...)")
-    parser.add_argument("--boundary", choices=("circle", "square"), default="circle",
-                        help="boundary shape of the fixed-boundary methods")
-    parser.add_argument("--max-iterations", type=int, default=200, help="spectral: iterations")
-    parser.add_argument("--tolerance-exponent", type=int, default=-10,
-                        help="spectral: tolerance as a power of ten")
+    parser.add_argument("--boundary", choices=("circle", "square", "free", "convex"), default=None,
+                        help="tutte/harmonic/mean_value: circle or square (default circle); "
+                             "abf: free or convex (default free)")
+    parser.add_argument("--solver", choices=("abf++", "abf"), default=None,
+                        help="abf: ABF++ block elimination or the plain ABF system (default abf++)")
+    parser.add_argument("--max-iterations", type=int, default=None,
+                        help="spectral / abf: most iterations (default: the method's)")
+    parser.add_argument("--tolerance-exponent", type=int, default=None,
+                        help="spectral / abf: tolerance as a power of ten (default: the method's)")
     parser.add_argument("--seams-from-islands", action="store_true",
                         help="mark seams from the islands of the input's active UV map first")
     parser.add_argument("--no-pack", action="store_true",
@@ -81,8 +85,26 @@ def main(argv=None):
     mesh_io = addon.mesh_io
     import uvflat
 
-    if args.method not in uvflat.METHODS:
-        raise SystemExit(f"unknown method {args.method!r}; available: {', '.join(uvflat.METHODS)}")
+    known = [m.id for m in addon.methods.METHODS if m.id in uvflat.METHODS]
+    if args.method not in known:
+        raise SystemExit(f"unknown method {args.method!r}; available: {', '.join(known)}")
+    # command-line options onto the operator properties of the chosen method (keys of OPTIONS)
+    given = {"boundary": args.boundary, "abf_boundary": args.boundary, "abf_solver": args.solver,
+             "max_iterations": args.max_iterations, "abf_max_iterations": args.max_iterations,
+             "tolerance_exponent": args.tolerance_exponent,
+             "abf_tolerance_exponent": args.tolerance_exponent}
+    method_props = {key: given[key] for key in addon.methods.METHOD_BY_ID[args.method].options
+                    if given.get(key) is not None}
+    try:
+        for key, value in method_props.items():
+            # validate enum values against the property definition before touching the mesh
+            prop = addon.methods.OPTIONS[key].make_property()
+            items = getattr(prop, "keywords", {}).get("items")
+            if items and value not in [i[0] for i in items]:
+                raise ValueError(f"--{key.removeprefix('abf_').replace('_', '-')} {value!r} "
+                                 f"is not an option of {args.method}: {[i[0] for i in items]}")
+    except ValueError as ex:
+        raise SystemExit(str(ex)) from None
 
     log(f"loading {args.input}")
     obj = common.load_mesh_object(args.input)
@@ -101,8 +123,7 @@ def main(argv=None):
     common.edit_mode([obj])
     log(f"unwrapping with {args.method}")
     result = bpy.ops.uv.uvflat_unwrap(
-        method=args.method, boundary=args.boundary, max_iterations=args.max_iterations,
-        tolerance_exponent=args.tolerance_exponent, pack=not args.no_pack, margin=args.margin)
+        method=args.method, pack=not args.no_pack, margin=args.margin, **method_props)
     common.object_mode()
     summary = addon.engine.LAST_SUMMARY
     if "FINISHED" not in result or summary is None:

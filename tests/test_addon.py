@@ -32,7 +32,7 @@ import common  # noqa: E402
 SHARED = REPO.parent / "shared" / "meshes"
 SHARED_MESHES = ("camelhead.off", "lion.off", "beetle.off", "halftunnel.off")
 # Methods that promise no flipped triangle (positive weights, convex boundary).
-FLIP_FREE = [("tutte", {}), ("mean_value", {"boundary": "circle"})]
+FLIP_FREE = [("tutte", {}), ("mean_value", {"boundary": "circle"}), ("slim", {})]
 # LSCM promises no injectivity; it must still solve, respect seams and report flips honestly,
 # and it has none on these disks (where Blender's CONFORMAL flips thousands on camelhead).
 LSCM_NO_FLIP_MESHES = {"camelhead.off", "lion.off", "beetle.off"}
@@ -535,3 +535,108 @@ def test_scene_defaults_panel_properties(ext, scene):
     names = ext.methods.SETTING_NAMES
     assert {"method", "pack", "margin", "boundary", "max_iterations"} <= set(names)
     assert ext.methods.core_options(defaults) == {"max_iterations": 321, "tolerance": 1e-10}
+
+
+# ---------------------------------------------------------------------------------------------
+# ABF / ABF++
+
+# ABF's solved angles are those of a planar triangulation with every angle in (0, pi), so the
+# reconstruction of a *disk* chart never flips.  On a chart with holes the angles do not close
+# the holes up (as in the papers): the reconstruction is least squares there and promises
+# nothing, so only the report's honesty is checked (as for LSCM).
+
+
+def _abf_check(ext, obj, summary):
+    """Every chart solved by ABF; seams respected; the report tells the truth about flips;
+    no flipped face (counted here, independently of the core) on the disk charts."""
+    result = summary.results[obj.name]
+    for c in result.charts:
+        assert c.status == "solved", f"{obj.name}: chart {c.id} {c.status}: {c.reason}"
+        assert c.method == "abf"
+    data = check_result(ext, obj, summary, expect_no_flips=False)
+    disks = [c.id for c in result.charts if c.kind == "disk"]
+    chart = np.asarray(result.chart)
+    on_disks = np.where(np.isin(chart, disks), chart, -1)
+    assert flipped_triangles(data, on_disks) == 0, f"{obj.name}: flips on a disk chart"
+    assert all(c.flips == 0 for c in result.charts if c.kind == "disk")
+    return result
+
+
+def test_abf_suzanne_seams_and_no_flips(ext, scene):
+    obj = suzanne()
+    result, summary = unwrap(ext, [obj], method="abf")
+    assert result == {"FINISHED"}
+    assert summary.charts >= 2, summary.line()
+    res = _abf_check(ext, obj, summary)
+    assert sum(c.kind == "disk" for c in res.charts) >= 2
+
+
+@pytest.mark.parametrize("mesh", SHARED_MESHES)
+def test_abf_shared_meshes(ext, scene, mesh):
+    obj = shared_mesh(mesh)
+    result, summary = unwrap(ext, [obj], method="abf")
+    assert result == {"FINISHED"}, summary
+    assert not summary.failed, summary.line()
+    res = _abf_check(ext, obj, summary)
+    import uvflat
+
+    # The report agrees with uvflat.metrics measuring the UVs as written into Blender (float32
+    # storage and packing scale aside): flips exactly, conformal distortion closely.
+    data = read(ext, obj)
+    m = uvflat.metrics(data.positions, data.corner_verts, data.face_sizes, data.uv)
+    assert m.flips == sum(c.flips for c in res.charts)
+    if len(res.charts) == 1:
+        c = res.charts[0]
+        assert abs(m.conformal - c.conformal) < 1e-3 * m.conformal, (m.conformal, c.conformal)
+
+
+def test_abf_convex_boundary_on_a_disk(ext, scene):
+    obj = shared_mesh("lion.off")
+    result, summary = unwrap(ext, [obj], method="abf", abf_boundary="convex")
+    assert result == {"FINISHED"}, summary
+    _abf_check(ext, obj, summary)
+    import uvflat
+
+    data = read(ext, obj)
+    m = uvflat.metrics(data.positions, data.corner_verts, data.face_sizes, data.uv)
+    assert m.overlapping_charts == 0
+
+
+def test_abf_options_reach_the_core_and_the_panel_shows_only_them(ext, scene):
+    defaults = bpy.context.scene.uvflat
+    defaults.method = "abf"
+    defaults.abf_solver = "abf"
+    defaults.abf_boundary = "convex"
+    defaults.abf_max_iterations = 17
+    defaults.abf_tolerance_exponent = -11
+    assert ext.methods.core_options(defaults) == {
+        "solver": "abf", "boundary": "convex", "max_iterations": 17, "tolerance": 1e-11}
+    keys = set(ext.methods.OPTIONS)
+    assert len(keys) == len(set(ext.methods.SETTING_NAMES) & keys)
+
+    class Layout:
+        def __init__(self):
+            self.props = []
+
+        def prop(self, _props, name):
+            self.props.append(name)
+
+        def column(self):
+            return self
+
+    layout = Layout()
+    ext.methods.draw_settings(layout, defaults)
+    shown = set(layout.props) & keys
+    assert shown == {"abf_solver", "abf_boundary", "abf_max_iterations", "abf_tolerance_exponent"}
+    defaults.method = "spectral"
+    layout = Layout()
+    ext.methods.draw_settings(layout, defaults)
+    assert set(layout.props) & keys == {"max_iterations", "tolerance_exponent"}
+
+
+def test_abf_plain_solver_through_the_operator(ext, scene):
+    """The plain ABF solver (sparse LU of the full system) reaches the same kind of result."""
+    obj = suzanne()
+    result, summary = unwrap(ext, [obj], method="abf", abf_solver="abf")
+    assert result == {"FINISHED"}
+    _abf_check(ext, obj, summary)

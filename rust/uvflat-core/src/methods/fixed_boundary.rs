@@ -7,6 +7,14 @@
 //! interior vertex and dropped afterwards, so the chart stays a disk and Tutte/Floater's
 //! guarantee (positive weights + convex boundary ⇒ no flips) covers its real triangles.
 //!
+//! Virtual boundary ([`BoundaryShape::Virtual`]; Y. Lee, H. S. Kim, S. Lee, "Mesh
+//! parameterization with a virtual boundary", Computers & Graphics 26(5), 2002): the outer loop
+//! is surrounded by a band of virtual triangles (rings of new vertices offset outward in the
+//! local tangent plane, see [`add_virtual_band`]); the band's outer ring goes to the circle and
+//! the real boundary moves freely inside it, so it is no longer forced onto a convex shape.
+//! With mean value weights (positive on any triangle) the extended disk still has a convex
+//! boundary and positive weights, so Floater's no-flip guarantee covers the real triangles.
+//!
 //! Pins: the chart is first solved without them; its boundary shape is then moved by the
 //! least-squares similarity onto the pins, and pinned vertices are fixed at their pinned UVs
 //! together with the boundary (the report notes this). Pins far from the similarity can flip
@@ -66,6 +74,117 @@ pub fn fill_holes(chart: &Chart) -> Extended {
     Extended { positions, triangles, outer: chart.boundary_loops[outer_i].clone() }
 }
 
+/// Number of rings of virtual vertices of [`add_virtual_band`].
+pub const VIRTUAL_RINGS: usize = 6;
+/// Ratio of the widths of consecutive rings of [`add_virtual_band`].
+pub const VIRTUAL_GROWTH: f64 = 1.5;
+
+/// Surround the outer loop of `ext` by a band of virtual triangles and make the band's outer
+/// ring the new outer loop (Lee, Kim, Lee 2002, "virtual boundary").
+///
+/// Ring k (k = 1..=[`VIRTUAL_RINGS`]) puts one vertex beside every outer-loop vertex, offset
+/// outward in the loop's mean plane (outward = loop tangent × the chart's vector area; the
+/// vertex normal where the two are parallel) by h (1 + g + … + g^(k−1)), h the mean loop edge
+/// length and g = [`VIRTUAL_GROWTH`]. Consecutive rings are joined by two triangles per
+/// loop edge with the chart's orientation. The band may fold in 3D at concave boundary
+/// corners; that does not matter for mean value weights, which are positive on any
+/// non-degenerate triangle.
+///
+/// Preconditions: `ext.outer` is a boundary loop of `ext.triangles` with the chart on its left
+/// and at least 3 vertices. Never fails; degenerate normals fall back to the direction away
+/// from the loop's centroid.
+pub fn add_virtual_band(ext: &mut Extended) {
+    let outer = ext.outer.clone();
+    let m = outer.len();
+    if m < 3 {
+        return;
+    }
+    let pos = &ext.positions;
+    // Area-weighted normals of the loop vertices.
+    let mut slot = vec![u32::MAX; pos.len()];
+    for (k, &v) in outer.iter().enumerate() {
+        slot[v as usize] = k as u32;
+    }
+    let mut normal = vec![[0.0f64; 3]; m];
+    for t in &ext.triangles {
+        let nrm = crate::geometry::cross(
+            sub(pos[t[1] as usize], pos[t[0] as usize]),
+            sub(pos[t[2] as usize], pos[t[0] as usize]),
+        );
+        for &v in t {
+            let k = slot[v as usize];
+            if k != u32::MAX {
+                for d in 0..3 {
+                    normal[k as usize][d] += nrm[d];
+                }
+            }
+        }
+    }
+    let mut length = 0.0;
+    let mut centroid = [0.0; 3];
+    for i in 0..m {
+        length += norm(sub(pos[outer[(i + 1) % m] as usize], pos[outer[i] as usize]));
+        for d in 0..3 {
+            centroid[d] += pos[outer[i] as usize][d] / m as f64;
+        }
+    }
+    if !(length > 0.0) {
+        return;
+    }
+    // The chart's vector area (for a disk, the vector area of the outer loop by Stokes): the
+    // band is a flange in the loop's mean plane, which keeps its triangles well shaped (the
+    // tangent plane of a tube-like rim would extend the tube instead).
+    let mut area_normal = [0.0; 3];
+    for t in &ext.triangles {
+        let nrm = crate::geometry::cross(sub(pos[t[1] as usize], pos[t[0] as usize]), sub(pos[t[2] as usize], pos[t[0] as usize]));
+        for d in 0..3 {
+            area_normal[d] += nrm[d];
+        }
+    }
+    let mut dirs = Vec::with_capacity(m);
+    for i in 0..m {
+        let p = pos[outer[(i + m - 1) % m] as usize];
+        let q = pos[outer[(i + 1) % m] as usize];
+        let t = sub(q, p);
+        let mut d = crate::geometry::cross(t, area_normal);
+        if !(norm(d) > 1e-12 * norm(t) * norm(area_normal)) {
+            // Loop tangent parallel to the mean normal: use the vertex's own tangent plane.
+            d = crate::geometry::cross(t, normal[i]);
+        }
+        let mut l = norm(d);
+        if !(l > 1e-300) || !l.is_finite() {
+            d = sub(pos[outer[i] as usize], centroid);
+            l = norm(d);
+        }
+        dirs.push(if l > 0.0 && l.is_finite() { [d[0] / l, d[1] / l, d[2] / l] } else { [0.0; 3] });
+    }
+    // Ring k sits h (1 + g + … + g^(k−1)) outward, h the mean loop edge length.
+    let h = length / m as f64;
+    let mut prev: Vec<u32> = outer.clone();
+    let mut offset = 0.0;
+    let mut step = h;
+    let growth = VIRTUAL_GROWTH;
+    for _ in 0..VIRTUAL_RINGS {
+        offset += step;
+        step *= growth;
+        let ring: Vec<u32> = (0..m)
+            .map(|i| {
+                let b = outer[i] as usize;
+                let p = ext.positions[b];
+                ext.positions.push([p[0] + offset * dirs[i][0], p[1] + offset * dirs[i][1], p[2] + offset * dirs[i][2]]);
+                (ext.positions.len() - 1) as u32
+            })
+            .collect();
+        for i in 0..m {
+            let j = (i + 1) % m;
+            ext.triangles.push([prev[j], prev[i], ring[i]]);
+            ext.triangles.push([prev[j], ring[i], ring[j]]);
+        }
+        prev = ring;
+    }
+    ext.outer = prev;
+}
+
 /// UV of every outer-loop vertex on the boundary shape, spaced by 3D arc length,
 /// counter-clockwise (the chart is left of the loop, so triangles come out positive).
 pub fn boundary_positions(positions: &[[f64; 3]], outer: &[u32], shape: BoundaryShape) -> Vec<[f64; 2]> {
@@ -83,7 +202,7 @@ pub fn boundary_positions(positions: &[[f64; 3]], outer: &[u32], shape: Boundary
         (0..n).map(|i| i as f64 / n as f64).collect()
     };
     match shape {
-        BoundaryShape::Circle => t
+        BoundaryShape::Circle | BoundaryShape::Virtual => t
             .iter()
             .map(|&x| {
                 let a = std::f64::consts::TAU * x;
@@ -188,7 +307,10 @@ pub fn solve(
     shape: BoundaryShape,
     weights: Weights,
 ) -> Result<ChartSolution, ChartFailure> {
-    let ext = fill_holes(chart);
+    let mut ext = fill_holes(chart);
+    if shape == BoundaryShape::Virtual {
+        add_virtual_band(&mut ext);
+    }
     let n = ext.positions.len();
     let trip = laplacian_triplets(&ext.positions, &ext.triangles, weights);
     let symmetry = if weights == Weights::MeanValue { Symmetry::General } else { Symmetry::Symmetric };
@@ -236,6 +358,7 @@ pub fn solve(
             match shape {
                 BoundaryShape::Circle => "circle",
                 BoundaryShape::Square => "square",
+                BoundaryShape::Virtual => "virtual circle",
             }
         ));
     }

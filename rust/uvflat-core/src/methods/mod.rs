@@ -4,10 +4,14 @@
 //! (closed, higher genus, defects found while building the chart) fail here with a reason.
 
 pub mod abf;
+pub mod arap;
 pub mod fixed_boundary;
 pub mod harmonic;
 pub mod lscm;
 pub mod mean_value;
+pub mod mips;
+pub mod scaffold;
+pub mod slim;
 pub mod spectral;
 pub mod tutte;
 
@@ -24,6 +28,11 @@ pub enum BoundaryShape {
     Circle,
     /// Unit square, the four boundary vertices nearest the quarter arc lengths at its corners.
     Square,
+    /// Virtual boundary (Lee, Kim, Lee 2002): a band of virtual triangles around the outer
+    /// loop goes to the unit circle and the real boundary settles freely inside it (see
+    /// [`fixed_boundary::add_virtual_band`]). Less distortion than `Circle`; with mean value
+    /// (or uniform) weights still no flips.
+    Virtual,
 }
 
 /// Options of the spectral conformal method.
@@ -31,7 +40,8 @@ pub enum BoundaryShape {
 pub struct SpectralOptions {
     /// Most inverse-iteration steps. Default 200.
     pub max_iterations: usize,
-    /// Stop when the Rayleigh quotient changes by less than this (relative). Default 1e-10.
+    /// Stop when the B-norm change of the B-normalised iterate between two inverse-iteration
+    /// steps is below this. Default 1e-10.
     pub tolerance: f64,
 }
 
@@ -58,6 +68,18 @@ pub enum Method {
     /// Sheffer & de Sturler 2001 / Sheffer et al. 2005: angle based flattening (ABF++ by
     /// default), UVs by LSCM from the solved angles; falls back to LSCM when it fails.
     Abf(abf::AbfOptions),
+    /// Liu et al. 2008: as-rigid-as-possible, local/global iterations from LSCM, free
+    /// boundary; no injectivity guarantee.
+    Arap(arap::ArapOptions),
+    /// Rabinovich et al. 2017: symmetric Dirichlet by reweighted proxies with a flip-free line
+    /// search, free boundary; never flips a triangle of a chart that starts valid.
+    Slim(slim::SlimOptions),
+    /// Hormann & Greiner 2000: MIPS energy σ1/σ2 + σ2/σ1 by projected Newton from a flip-free
+    /// start with a flip-free line search, free boundary; never flips.
+    Mips(mips::MipsOptions),
+    /// Jiang, Schaefer & Panozzo 2017 (SCAF): symmetric Dirichlet on the chart plus a
+    /// re-triangulated scaffold of the free space; no flips and no boundary self-overlap.
+    Scaffold(scaffold::ScaffoldOptions),
 }
 
 /// A value of a method option as it arrives from Python, the add-on or a command line.
@@ -71,7 +93,7 @@ pub enum OptionValue {
 
 /// Names accepted by [`Method::parse`].
 pub fn method_names() -> &'static [&'static str] {
-    &["tutte", "harmonic", "mean_value", "lscm", "spectral", "abf"]
+    &["tutte", "harmonic", "mean_value", "lscm", "spectral", "abf", "arap", "slim", "mips", "scaffold"]
 }
 
 fn opt_err(name: &'static str, reason: impl Into<String>) -> UvError {
@@ -106,6 +128,10 @@ impl Method {
         let mut boundary = BoundaryShape::Circle;
         let mut spectral = SpectralOptions::default();
         let mut abf_opts = abf::AbfOptions::default();
+        let mut arap_opts = arap::ArapOptions::default();
+        let mut slim_opts = slim::SlimOptions::default();
+        let mut mips_opts = mips::MipsOptions::default();
+        let mut scaffold_opts = scaffold::ScaffoldOptions::default();
         let fixed = matches!(name, "tutte" | "harmonic" | "mean_value");
         for (key, value) in options {
             match (key.as_str(), name) {
@@ -113,7 +139,8 @@ impl Method {
                     boundary = match value {
                         OptionValue::Str(s) if s == "circle" => BoundaryShape::Circle,
                         OptionValue::Str(s) if s == "square" => BoundaryShape::Square,
-                        other => return Err(opt_err("boundary", format!("expected \"circle\" or \"square\", got {other:?}"))),
+                        OptionValue::Str(s) if s == "virtual" => BoundaryShape::Virtual,
+                        other => return Err(opt_err("boundary", format!("expected \"circle\", \"square\" or \"virtual\", got {other:?}"))),
                     }
                 }
                 ("max_iterations", "spectral") => spectral.max_iterations = as_count("max_iterations", value)?,
@@ -134,6 +161,21 @@ impl Method {
                         other => return Err(opt_err("boundary", format!("expected \"free\" or \"convex\", got {other:?}"))),
                     }
                 }
+                ("max_iterations", "arap") => arap_opts.max_iterations = as_count("max_iterations", value)?,
+                ("tolerance", "arap") => arap_opts.tolerance = as_float("tolerance", value)?,
+                ("max_iterations", "slim") => slim_opts.max_iterations = as_count("max_iterations", value)?,
+                ("tolerance", "slim") => slim_opts.tolerance = as_float("tolerance", value)?,
+                ("max_iterations", "mips") => mips_opts.max_iterations = as_count("max_iterations", value)?,
+                ("tolerance", "mips") => mips_opts.tolerance = as_float("tolerance", value)?,
+                ("max_iterations", "scaffold") => scaffold_opts.max_iterations = as_count("max_iterations", value)?,
+                ("tolerance", "scaffold") => scaffold_opts.tolerance = as_float("tolerance", value)?,
+                ("start", "slim") => {
+                    slim_opts.start = match value {
+                        OptionValue::Str(s) if s == "auto" => slim::SlimStart::Auto,
+                        OptionValue::Str(s) if s == "mean_value" => slim::SlimStart::MeanValue,
+                        other => return Err(opt_err("start", format!("expected \"auto\" or \"mean_value\", got {other:?}"))),
+                    }
+                }
                 _ => {
                     if !method_names().contains(&name) {
                         break;
@@ -152,6 +194,10 @@ impl Method {
             "lscm" => Method::Lscm,
             "spectral" => Method::Spectral(spectral),
             "abf" => Method::Abf(abf_opts),
+            "arap" => Method::Arap(arap_opts),
+            "slim" => Method::Slim(slim_opts),
+            "mips" => Method::Mips(mips_opts),
+            "scaffold" => Method::Scaffold(scaffold_opts),
             other => {
                 return Err(opt_err("method", format!("unknown method {other:?}; expected one of {:?}", method_names())))
             }
@@ -169,6 +215,10 @@ impl Method {
             Method::Lscm => "lscm",
             Method::Spectral(_) => "spectral",
             Method::Abf(_) => "abf",
+            Method::Arap(_) => "arap",
+            Method::Slim(_) => "slim",
+            Method::Mips(_) => "mips",
+            Method::Scaffold(_) => "scaffold",
         }
     }
 
@@ -187,6 +237,21 @@ impl Method {
                 return Err(opt_err("tolerance", format!("must be a positive number, got {}", o.tolerance)));
             }
             if o.max_iterations == 0 {
+                return Err(opt_err("max_iterations", "must be at least 1"));
+            }
+        }
+        let iterative = match self {
+            Method::Arap(o) => Some((o.max_iterations, o.tolerance)),
+            Method::Slim(o) => Some((o.max_iterations, o.tolerance)),
+            Method::Mips(o) => Some((o.max_iterations, o.tolerance)),
+            Method::Scaffold(o) => Some((o.max_iterations, o.tolerance)),
+            _ => None,
+        };
+        if let Some((max_iterations, tolerance)) = iterative {
+            if !(tolerance >= 0.0 && tolerance.is_finite()) {
+                return Err(opt_err("tolerance", format!("must be a non-negative number, got {tolerance}")));
+            }
+            if max_iterations == 0 {
                 return Err(opt_err("max_iterations", "must be at least 1"));
             }
         }
@@ -270,6 +335,10 @@ pub fn solve(method: &Method, chart: &Chart, pins: &[(u32, [f64; 2])]) -> std::r
         Method::Lscm => lscm::solve(chart, pins),
         Method::Spectral(o) => spectral::solve(chart, pins, o),
         Method::Abf(o) => abf::solve(chart, pins, o),
+        Method::Arap(o) => arap::solve(chart, pins, o),
+        Method::Slim(o) => slim::solve(chart, pins, o),
+        Method::Mips(o) => mips::solve(chart, pins, o),
+        Method::Scaffold(o) => scaffold::solve(chart, pins, o),
     }?;
     if let Some(i) = sol.uv.iter().position(|p| !p[0].is_finite() || !p[1].is_finite()) {
         return Err(ChartFailure(format!("the solve produced a non-finite UV at mesh vertex {}", chart.mesh_vertex[i])));

@@ -1,6 +1,7 @@
 //! Shared solver pieces: the quadratic-with-fixed-values solver behind every linear method
 //! (and the global steps of the iterative ones).
 
+pub mod line_search;
 mod quadratic;
 
 pub use quadratic::{FixedValueSolver, Scalar, Symmetry};

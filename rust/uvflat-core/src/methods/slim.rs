@@ -1,0 +1,409 @@
+//! Scalable Locally Injective Mappings: symmetric Dirichlet energy, never a flipped triangle.
+//!
+//! Paper: M. Rabinovich, R. Poranne, D. Panozzo, O. Sorkine-Hornung, "Scalable Locally
+//! Injective Mappings", ACM TOG 36(2), 2017. Line search: J. Smith, S. Schaefer, "Bijective
+//! parameterization with free boundaries", ACM TOG 34(4), 2015
+//! ([`crate::solvers::line_search`]).
+//!
+//! Energy, over the chart triangles f with reference area A_f and Jacobian singular values
+//! σ1, σ2 (see [`TriangleOperators`]):
+//!
+//! ```text
+//! E(x) = Σ_f A_f (σ1² + σ2² + σ1⁻² + σ2⁻²) = Σ_f A_f ‖J_f‖²_F (1 + 1/det(J_f)²)
+//! ```
+//!
+//! and `+∞` as soon as a triangle has `det J_f ≤ 0`. Reported per unit area and divided by 4
+//! (1 for an isometry), like the symmetric Dirichlet of [`crate::metrics`].
+//!
+//! Each iteration:
+//! 1. Local step (parallel): the SVD `J = U Σ Vᵀ` of every triangle gives the closest rotation
+//!    `R = U Vᵀ` and the reweighting `W² = U diag(w1², w2²) Uᵀ` with
+//!    `w² = h'(σ) / (2(σ − 1)) = (σ + 1)(σ² + 1) / σ³` for `h(σ) = σ² + σ⁻²` (paper, eq. 9).
+//! 2. Global step: minimise the proxy `Σ A_f tr((J_f − R_f)ᵀ W_f² (J_f − R_f))`, a weighted
+//!    least-squares problem over the interleaved unknowns `[u0, v0, u1, v1, …]` with matrix
+//!    `Σ A_f (W_f² ⊗ L_f)` (`L_f` the triangle's stiffness). The weights change every
+//!    iteration but the sparsity pattern does not: the symbolic analysis is done once and each
+//!    iteration is one numeric refactorisation ([`FixedValueSolver::refactor`]) and one solve.
+//! 3. Flip-free line search on the true energy from the current map towards the proxy
+//!    minimiser: the step never reaches a degenerate triangle and strictly decreases E.
+//!
+//! Start: a flip-free map. [`SlimStart::Auto`] (default) tries LSCM and the mean value map on
+//! a circle (Floater 2003, flip-free by Tutte's theorem) and keeps whichever has no
+//! non-positive triangle and the lower energy; [`SlimStart::MeanValue`] uses only the latter.
+//! Without pins (or with pins that do not span more than a point) the start is scaled by the
+//! energy-optimal factor `(Σ A ‖J⁻¹‖² / Σ A ‖J‖²)^{1/4}` and translated onto the pin.
+//!
+//! Guarantee: every triangle of the result is positively oriented (the start is checked and
+//! every accepted step keeps it so); the energy history is strictly decreasing.
+//!
+//! Pins: pinned vertices are fixed in every global step. With pins spanning more than a point,
+//! the start honours them too (pinned LSCM or pinned mean value); when neither pinned start is
+//! flip-free, no flip-free map with those pins is known and the chart falls back to pinned
+//! LSCM, saying so ([`ChartSolution::fallback`]).
+//!
+//! Preconditions: a disk chart, possibly with holes. Failures: once a flip-free start exists
+//! none; a global step that cannot be factored or solved ends the iteration with the current
+//! (valid) map and says so in the note. Without a start, the LSCM fallback fails like
+//! [`lscm::solve`] (singular system of a disconnected chart).
+
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use super::arap::{anchors, closest_rotation, TriangleOperators};
+use super::fixed_boundary::{self, Weights};
+use super::{chart_angles, lscm, BoundaryShape, ChartFailure, ChartSolution, Fallback};
+use crate::charts::Chart;
+use crate::solvers::line_search::{all_positive, flip_free_line_search, LineSearchOptions};
+use crate::solvers::{FixedValueSolver, Symmetry};
+
+/// Which flip-free map SLIM starts from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SlimStart {
+    /// LSCM if it is flip-free and has the lower energy, else mean value on a circle. Default.
+    #[default]
+    Auto,
+    /// Mean value map with the boundary on a circle (the paper's Tutte-like start).
+    MeanValue,
+}
+
+/// Options of the SLIM method.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SlimOptions {
+    /// Most iterations. Default 15 (on camelhead, from the mean value start, enough to reach a
+    /// lower symmetric Dirichlet than Blender's MINIMUM_STRETCH unwrap).
+    pub max_iterations: usize,
+    /// Stop when the energy decreases by less than this, relative. Default 1e-5.
+    pub tolerance: f64,
+    /// Starting map. Default [`SlimStart::Auto`].
+    pub start: SlimStart,
+}
+
+impl Default for SlimOptions {
+    fn default() -> Self {
+        SlimOptions { max_iterations: 15, tolerance: 1e-5, start: SlimStart::Auto }
+    }
+}
+
+/// What [`solve_with_history`] reports beside the map.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SlimHistory {
+    /// Symmetric Dirichlet energy per unit area / 4 of the start and after every iteration.
+    pub energy: Vec<f64>,
+    /// Accepted line-search step of every iteration.
+    pub step: Vec<f64>,
+    /// Seconds per iteration: `[assembly (local step, matrix values, right-hand side),
+    /// numeric factorisation, solve, line search]`. The first iteration's factorisation
+    /// includes the symbolic analysis.
+    pub seconds: Vec<[f64; 4]>,
+    /// Name of the starting map ("lscm" or "mean_value").
+    pub start: &'static str,
+    /// Seconds spent computing and checking the starting maps.
+    pub start_seconds: f64,
+}
+
+/// Symmetric Dirichlet energy `Σ A (‖J‖² + ‖J⁻¹‖²) / (4 Σ A)` of `uv`; `+∞` if any triangle
+/// has a non-positive Jacobian determinant.
+pub fn symmetric_dirichlet(ops: &TriangleOperators, triangles: &[[u32; 3]], uv: &[[f64; 2]]) -> f64 {
+    let e: f64 = triangles
+        .par_iter()
+        .enumerate()
+        .with_min_len(2048)
+        .map(|(f, t)| {
+            let j = ops.jacobian(f, t, uv);
+            let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+            if det <= 0.0 || det.is_nan() {
+                return f64::INFINITY;
+            }
+            let fro = j[0][0] * j[0][0] + j[0][1] * j[0][1] + j[1][0] * j[1][0] + j[1][1] * j[1][1];
+            ops.area[f] * fro * (1.0 + 1.0 / (det * det))
+        })
+        .sum();
+    e / (4.0 * ops.total_area)
+}
+
+/// Scale `uv` about the origin by the factor minimising the symmetric Dirichlet energy
+/// (`E(s) = s² P + s⁻² Q`, optimal `s = (Q/P)^{1/4}`). No-op for an invalid map.
+fn scale_optimally(ops: &TriangleOperators, triangles: &[[u32; 3]], uv: &mut [[f64; 2]]) {
+    let (p, q) = triangles
+        .par_iter()
+        .enumerate()
+        .with_min_len(2048)
+        .map(|(f, t)| {
+            let j = ops.jacobian(f, t, uv);
+            let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+            let fro = j[0][0] * j[0][0] + j[0][1] * j[0][1] + j[1][0] * j[1][0] + j[1][1] * j[1][1];
+            (ops.area[f] * fro, ops.area[f] * fro / (det * det))
+        })
+        .reduce(|| (0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
+    let s = (q / p).sqrt().sqrt();
+    if s.is_finite() && s > 0.0 {
+        for x in uv.iter_mut() {
+            *x = [s * x[0], s * x[1]];
+        }
+    }
+}
+
+/// Per-triangle local step: `W²` (symmetric, as `[m00, m01, m11]`) and `W² R` (row-major).
+#[inline]
+fn reweight(j: [[f64; 2]; 2]) -> ([f64; 3], [[f64; 2]; 2]) {
+    let (a, b, c, d) = (j[0][0], j[0][1], j[1][0], j[1][1]);
+    // Singular values (det > 0 on a valid map, so q > r).
+    let q = (0.5 * (a + d)).hypot(0.5 * (c - b));
+    let r = (0.5 * (a - d)).hypot(0.5 * (c + b));
+    let s1 = q + r;
+    let s2 = (q - r).max(1e-300);
+    let w = |s: f64| (s + 1.0) * (s * s + 1.0) / (s * s * s);
+    let (w1, w2) = (w(s1), w(s2));
+    // Left singular vector of σ1: principal eigenvector of J Jᵀ.
+    let phi = 0.5 * (2.0 * (a * c + b * d)).atan2(a * a + b * b - c * c - d * d);
+    let (cp, sp) = (phi.cos(), phi.sin());
+    let m = [w1 * cp * cp + w2 * sp * sp, (w1 - w2) * cp * sp, w1 * sp * sp + w2 * cp * cp];
+    let (rc, rs) = closest_rotation(j);
+    let rot = [[rc, -rs], [rs, rc]];
+    let mr = [
+        [m[0] * rot[0][0] + m[1] * rot[1][0], m[0] * rot[0][1] + m[1] * rot[1][1]],
+        [m[1] * rot[0][0] + m[2] * rot[1][0], m[1] * rot[0][1] + m[2] * rot[1][1]],
+    ];
+    (m, mr)
+}
+
+/// A valid starting map: UVs, its energy and its name.
+type Start = (Vec<[f64; 2]>, f64, &'static str);
+
+fn pick_start(
+    chart: &Chart,
+    pins: &[(u32, [f64; 2])],
+    ops: &TriangleOperators,
+    options: &SlimOptions,
+) -> Result<(Option<Start>, Vec<String>), ChartFailure> {
+    let tris = &chart.triangles;
+    let spanning = lscm::pins_span(pins);
+    let start_pins: &[(u32, [f64; 2])] = if spanning { pins } else { &[] };
+    let mut candidates: Vec<(Vec<[f64; 2]>, &'static str)> = Vec::new();
+    let mut rejected = Vec::new();
+    if options.start == SlimStart::Auto {
+        let angles = chart_angles(&chart.positions, tris);
+        match lscm::solve_with_angles(chart, &angles, start_pins) {
+            Ok((uv, _)) => candidates.push((uv, "lscm")),
+            Err(e) => rejected.push(format!("lscm: {}", e.0)),
+        }
+    }
+    match fixed_boundary::solve(chart, start_pins, BoundaryShape::Circle, Weights::MeanValue) {
+        Ok(s) => candidates.push((s.uv, "mean_value")),
+        Err(e) => rejected.push(format!("mean_value: {}", e.0)),
+    }
+    let mut best: Option<Start> = None;
+    for (mut uv, name) in candidates {
+        if !spanning {
+            scale_optimally(ops, tris, &mut uv);
+            if let Some(&(v, target)) = pins.first() {
+                let d = [target[0] - uv[v as usize][0], target[1] - uv[v as usize][1]];
+                for p in uv.iter_mut() {
+                    *p = [p[0] + d[0], p[1] + d[1]];
+                }
+            }
+        }
+        let e = symmetric_dirichlet(ops, tris, &uv);
+        if !all_positive(tris, &uv) || !e.is_finite() {
+            let bad = tris.iter().filter(|t| {
+                let (p0, p1, p2) = (uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]);
+                let a = (p1[0] - p0[0]) * (p2[1] - p0[1]) - (p1[1] - p0[1]) * (p2[0] - p0[0]);
+                a <= 0.0 || a.is_nan()
+            });
+            rejected.push(format!("{name}: {} flipped or degenerate triangle(s)", bad.count()));
+            continue;
+        }
+        if best.as_ref().is_none_or(|b| e < b.1) {
+            best = Some((uv, e, name));
+        }
+    }
+    Ok((best, rejected))
+}
+
+/// SLIM of one chart (see the module docs).
+pub fn solve(chart: &Chart, pins: &[(u32, [f64; 2])], options: &SlimOptions) -> Result<ChartSolution, ChartFailure> {
+    solve_with_history(chart, pins, options).map(|(s, _)| s)
+}
+
+/// SLIM of one chart, with the energy after every iteration, the accepted steps and the time
+/// split of every iteration. When no flip-free start exists (pins, or a chart so degenerate
+/// that the mean value map has zero-area triangles in floating point), the solution is pinned
+/// LSCM marked as a fallback and the history is empty.
+pub fn solve_with_history(
+    chart: &Chart,
+    pins: &[(u32, [f64; 2])],
+    options: &SlimOptions,
+) -> Result<(ChartSolution, SlimHistory), ChartFailure> {
+    let n = chart.positions.len();
+    let tris = &chart.triangles;
+    let ops = TriangleOperators::new(&chart.positions, tris);
+    let t_start = Instant::now();
+    let (start, rejected) = pick_start(chart, pins, &ops, options)?;
+    let start_seconds = t_start.elapsed().as_secs_f64();
+    let Some((mut uv, mut energy, start_name)) = start else {
+        let mut sol = lscm::solve(chart, pins)?;
+        sol.fallback = Some(Fallback {
+            method: "lscm",
+            reason: format!(
+                "no flip-free starting map{} ({}); SLIM needs one, LSCM used instead",
+                if lscm::pins_span(pins) { " honours the pins" } else { "" },
+                rejected.join("; ")
+            ),
+        });
+        return Ok((sol, SlimHistory::default()));
+    };
+    let mut history = SlimHistory { energy: vec![energy], start: start_name, start_seconds, ..Default::default() };
+
+    // Fixed pattern: per triangle the 21 lower-triangle entries of its 6 × 6 block over
+    // (u, v) of its three vertices.
+    let local: Vec<(usize, usize)> = (0..6).flat_map(|p| (0..=p).map(move |q| (p, q))).collect();
+    let mut pattern = Vec::with_capacity(tris.len() * local.len());
+    for t in tris {
+        for &(p, q) in &local {
+            let gp = 2 * t[p / 2] + (p % 2) as u32;
+            let gq = 2 * t[q / 2] + (q % 2) as u32;
+            pattern.push((gp.max(gq), gp.min(gq), 0.0));
+        }
+    }
+    let fixed = anchors(pins, &uv);
+    let fixed_ids: Vec<u32> = fixed.iter().flat_map(|p| [2 * p.0, 2 * p.0 + 1]).collect();
+    let fixed_vals = vec![fixed.iter().flat_map(|p| [p.1[0], p.1[1]]).collect::<Vec<f64>>()];
+    let mut solver: Option<FixedValueSolver> = None;
+    let mut values = vec![0.0; pattern.len()];
+    let ls = LineSearchOptions::default();
+    let mut change = 0.0;
+    let mut iterations = 0;
+    let mut stopped = None;
+    while iterations < options.max_iterations {
+        let t0 = Instant::now();
+        let rhs_parts: Vec<[[f64; 2]; 3]> = values
+            .par_chunks_mut(local.len())
+            .zip(tris.par_iter().enumerate())
+            .with_min_len(1024)
+            .map(|(vals, (f, t))| {
+                let (m, mr) = reweight(ops.jacobian(f, t, &uv));
+                let l = ops.stiffness(f);
+                let a = ops.area[f];
+                let mm = [[m[0], m[1]], [m[1], m[2]]];
+                for (k, &(p, q)) in local.iter().enumerate() {
+                    vals[k] = a * mm[p % 2][q % 2] * l[p / 2][q / 2];
+                }
+                let g = &ops.grad[f];
+                let mut out = [[0.0; 2]; 3];
+                for i in 0..3 {
+                    for c in 0..2 {
+                        out[i][c] = a * (mr[c][0] * g[0][i] + mr[c][1] * g[1][i]);
+                    }
+                }
+                out
+            })
+            .collect();
+        let mut b = vec![0.0; 2 * n];
+        for (t, c) in tris.iter().zip(&rhs_parts) {
+            for i in 0..3 {
+                b[2 * t[i] as usize] += c[i][0];
+                b[2 * t[i] as usize + 1] += c[i][1];
+            }
+        }
+        let t1 = Instant::now();
+        let factored = match solver.as_mut() {
+            None => {
+                for (p, v) in pattern.iter_mut().zip(&values) {
+                    p.2 = *v;
+                }
+                FixedValueSolver::new(2 * n, &pattern, &fixed_ids, Symmetry::Symmetric).map(|s| solver = Some(s))
+            }
+            Some(s) => s.refactor(&values),
+        };
+        let t2 = Instant::now();
+        // A failed global step (extreme weights) ends the iteration; the current map is valid.
+        let x = match factored.and_then(|()| solver.as_ref().expect("factored above").solve(&fixed_vals, &[b])) {
+            Ok(x) => x,
+            Err(e) => {
+                stopped = Some(e.to_string());
+                break;
+            }
+        };
+        let dir: Vec<[f64; 2]> = (0..n).map(|i| [x[0][2 * i] - uv[i][0], x[0][2 * i + 1] - uv[i][1]]).collect();
+        let t3 = Instant::now();
+        let out = flip_free_line_search(tris, &mut uv, &dir, energy, |q| symmetric_dirichlet(&ops, tris, q), &ls);
+        let t4 = Instant::now();
+        history.seconds.push([
+            (t1 - t0).as_secs_f64(),
+            (t2 - t1).as_secs_f64(),
+            (t3 - t2).as_secs_f64(),
+            (t4 - t3).as_secs_f64(),
+        ]);
+        iterations += 1;
+        if out.step == 0.0 {
+            change = 0.0;
+            break;
+        }
+        history.energy.push(out.energy);
+        history.step.push(out.step);
+        change = (energy - out.energy) / energy;
+        energy = out.energy;
+        if change < options.tolerance {
+            break;
+        }
+    }
+    let mut note = format!("symmetric Dirichlet {energy:.6} after {iterations} iteration(s), started from {start_name}");
+    if let Some(reason) = stopped {
+        note = format!("{note}; stopped early, the global step failed: {reason}");
+    }
+    let sol = ChartSolution { uv, iterations, residual: change, note: Some(note), fallback: None };
+    Ok((sol, history))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reweighting_matches_the_svd_and_the_energy_matches_singular_values() {
+        // J = U diag(s1, s2) Vᵀ with known factors.
+        let (s1, s2) = (2.5, 0.4);
+        let (u, v) = (0.7f64, -1.1f64);
+        let ru = [[u.cos(), -u.sin()], [u.sin(), u.cos()]];
+        let rv = [[v.cos(), -v.sin()], [v.sin(), v.cos()]];
+        let mut j = [[0.0; 2]; 2];
+        for a in 0..2 {
+            for b in 0..2 {
+                // (U Σ Vᵀ)_ab = Σ_k U_ak σ_k V_bk
+                j[a][b] = ru[a][0] * s1 * rv[b][0] + ru[a][1] * s2 * rv[b][1];
+            }
+        }
+        let (m, mr) = reweight(j);
+        let w = |s: f64| (s + 1.0) * (s * s + 1.0) / (s * s * s);
+        // W² has eigenvalues w(s1), w(s2) with eigenvector U e1 for w(s1).
+        let e1 = [ru[0][0], ru[1][0]];
+        let me1 = [m[0] * e1[0] + m[1] * e1[1], m[1] * e1[0] + m[2] * e1[1]];
+        assert!((me1[0] - w(s1) * e1[0]).abs() < 1e-12 && (me1[1] - w(s1) * e1[1]).abs() < 1e-12);
+        assert!((m[0] + m[2] - w(s1) - w(s2)).abs() < 1e-12);
+        // R = U Vᵀ, so W² R = W² U Vᵀ.
+        let r = [[ru[0][0] * rv[0][0] + ru[0][1] * rv[0][1], ru[0][0] * rv[1][0] + ru[0][1] * rv[1][1]],
+                 [ru[1][0] * rv[0][0] + ru[1][1] * rv[0][1], ru[1][0] * rv[1][0] + ru[1][1] * rv[1][1]]];
+        let mm = [[m[0], m[1]], [m[1], m[2]]];
+        for a in 0..2 {
+            for b in 0..2 {
+                let want = mm[a][0] * r[0][b] + mm[a][1] * r[1][b];
+                assert!((mr[a][b] - want).abs() < 1e-12);
+            }
+        }
+        // Energy of one triangle mapped by J equals (σ1² + σ2² + σ1⁻² + σ2⁻²)/4.
+        let p = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.3, 0.8, 0.0]];
+        let ops = TriangleOperators::new(&p, &[[0, 1, 2]]);
+        let uv: Vec<[f64; 2]> = p.iter().map(|z| [j[0][0] * z[0] + j[0][1] * z[1], j[1][0] * z[0] + j[1][1] * z[1]]).collect();
+        let e = symmetric_dirichlet(&ops, &[[0, 1, 2]], &uv);
+        let want = 0.25 * (s1 * s1 + s2 * s2 + 1.0 / (s1 * s1) + 1.0 / (s2 * s2));
+        assert!((e - want).abs() < 1e-12, "{e} vs {want}");
+        // Mirrored: infinite.
+        let mirrored: Vec<[f64; 2]> = uv.iter().map(|z| [z[0], -z[1]]).collect();
+        assert_eq!(symmetric_dirichlet(&ops, &[[0, 1, 2]], &mirrored), f64::INFINITY);
+        // The optimal scale of an isotropic map s·I is 1/s.
+        let mut scaled: Vec<[f64; 2]> = p.iter().map(|z| [3.0 * z[0], 3.0 * z[1]]).collect();
+        scale_optimally(&ops, &[[0, 1, 2]], &mut scaled);
+        assert!((symmetric_dirichlet(&ops, &[[0, 1, 2]], &scaled) - 1.0).abs() < 1e-12);
+    }
+}
