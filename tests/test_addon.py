@@ -32,7 +32,8 @@ import common  # noqa: E402
 SHARED = REPO.parent / "shared" / "meshes"
 SHARED_MESHES = ("camelhead.off", "lion.off", "beetle.off", "halftunnel.off")
 # Methods that promise no flipped triangle (positive weights, convex boundary).
-FLIP_FREE = [("tutte", {}), ("mean_value", {"boundary": "circle"}), ("slim", {})]
+FLIP_FREE = [("tutte", {}), ("mean_value", {"boundary": "circle"}), ("slim", {}), ("mips", {}),
+             ("mean_value", {"boundary": "virtual"})]
 # LSCM promises no injectivity; it must still solve, respect seams and report flips honestly,
 # and it has none on these disks (where Blender's CONFORMAL flips thousands on camelhead).
 LSCM_NO_FLIP_MESHES = {"camelhead.off", "lion.off", "beetle.off"}
@@ -640,3 +641,30 @@ def test_abf_plain_solver_through_the_operator(ext, scene):
     result, summary = unwrap(ext, [obj], method="abf", abf_solver="abf")
     assert result == {"FINISHED"}
     _abf_check(ext, obj, summary)
+
+
+# ---------------------------------------------------------------------------------------------
+# Scaffold (bijective) and ARAP (no injectivity promise)
+
+
+@pytest.mark.parametrize("mesh", ("suzanne", "camelhead.off", "lion.off"))
+def test_scaffold_no_flips_and_no_overlap(ext, scene, mesh):
+    obj = suzanne() if mesh == "suzanne" else shared_mesh(mesh)
+    result, summary = unwrap(ext, [obj], method="scaffold")
+    assert result == {"FINISHED"}, summary
+    assert not summary.failed, summary.line()
+    data = check_result(ext, obj, summary)
+    import uvflat
+
+    solved = np.asarray(summary.results[obj.name].face_solved, dtype=bool)
+    m = uvflat.metrics(data.positions, data.corner_verts, data.face_sizes, data.uv, selected=solved)
+    assert m.overlapping_charts == 0, f"{obj.name}: {m}"
+
+
+@pytest.mark.parametrize("mesh", ("suzanne", "camelhead.off"))
+def test_arap_reports_its_flips_honestly(ext, scene, mesh):
+    obj = suzanne() if mesh == "suzanne" else shared_mesh(mesh)
+    result, summary = unwrap(ext, [obj], method="arap")
+    assert result == {"FINISHED"}, summary
+    assert not summary.failed, summary.line()
+    check_result(ext, obj, summary, expect_no_flips=False)
