@@ -295,8 +295,9 @@ def test_suzanne_seams_and_no_flips(ext, scene, method, options):
     result, summary = unwrap(ext, [obj], method=method, **options)
     assert result == {"FINISHED"}
     assert summary.charts >= 2, summary.line()
-    # every chart solved; no flips for the flip-free methods; UV jumps exactly at seams
-    check_result(ext, obj, summary, expect_no_flips=(method != "lscm"))
+    # every chart solved; no flips (for lscm too: the quads around Suzanne's valence-2 vertices
+    # are split through them, so flattening opens no sliver); UV jumps exactly at seams
+    check_result(ext, obj, summary)
 
 
 @pytest.mark.parametrize("method,options", FLIP_FREE + [("lscm", {})],

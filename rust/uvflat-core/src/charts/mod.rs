@@ -12,7 +12,7 @@
 
 mod triangulate;
 
-pub use triangulate::{triangulate_polygon, triangulate_polygon_avoiding};
+pub use triangulate::{triangulate_polygon, triangulate_polygon_avoiding, triangulate_polygon_with};
 
 use std::collections::{HashMap, HashSet};
 
@@ -268,6 +268,18 @@ fn make_chart(mesh: &PolyMesh<'_>, faces: Vec<u32>, corner_root: &[u32], joined:
             }
         }
     }
+    // Faces per interior chart vertex (for quads around a vertex shared by only two faces);
+    // boundary vertices are marked u32::MAX.
+    let mut valence = vec![0u32; positions.len()];
+    if has_ngon {
+        for &v in &face_local {
+            valence[v as usize] += 1;
+        }
+        for &(a, b) in &boundary_edges {
+            valence[a as usize] = u32::MAX;
+            valence[b as usize] = u32::MAX;
+        }
+    }
     // Second pass: triangulate, keeping diagonals off edges that exist already.
     let mut poly_pts: Vec<[f64; 3]> = Vec::new();
     let mut offset = 0usize;
@@ -283,7 +295,8 @@ fn make_chart(mesh: &PolyMesh<'_>, faces: Vec<u32>, corner_root: &[u32], joined:
         }
         poly_pts.clear();
         poly_pts.extend(r.map(|c| positions_in[mesh.corner_vert(c) as usize]));
-        let tris = triangulate_polygon_avoiding(&poly_pts, |i, j| edges.contains(&ukey(local[i], local[j])));
+        let through = if m == 4 { (0..4).find(|&k| valence[local[k] as usize] == 2) } else { None };
+        let tris = triangulate_polygon_with(&poly_pts, |i, j| edges.contains(&ukey(local[i], local[j])), through);
         for t in tris {
             for k in 0..3 {
                 let (i, j) = (t[k], t[(k + 1) % 3]);

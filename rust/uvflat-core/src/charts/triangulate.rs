@@ -18,7 +18,19 @@ pub fn triangulate_polygon(pts: &[[f64; 3]]) -> Vec<[usize; 3]> {
 /// not `taken`: a diagonal that already exists as an edge elsewhere would make two triangles
 /// share a directed edge (two quads around a valence-2 vertex split along the same diagonal).
 /// A taken diagonal is used only when no other valid ear exists.
-pub fn triangulate_polygon_avoiding(pts: &[[f64; 3]], mut taken: impl FnMut(usize, usize) -> bool) -> Vec<[usize; 3]> {
+pub fn triangulate_polygon_avoiding(pts: &[[f64; 3]], taken: impl FnMut(usize, usize) -> bool) -> Vec<[usize; 3]> {
+    triangulate_polygon_with(pts, taken, None)
+}
+
+/// [`triangulate_polygon_avoiding`] where a quad may be asked to split through one corner
+/// (`through`): used for a vertex shared by only two faces (a cone point with a small angle
+/// sum, as around a valence-2 vertex), which flattening opens up to a full turn — the other
+/// diagonal would leave a sliver with an angle near π there.
+pub fn triangulate_polygon_with(
+    pts: &[[f64; 3]],
+    mut taken: impl FnMut(usize, usize) -> bool,
+    through: Option<usize>,
+) -> Vec<[usize; 3]> {
     let n = pts.len();
     if n < 3 {
         return Vec::new();
@@ -64,7 +76,8 @@ pub fn triangulate_polygon_avoiding(pts: &[[f64; 3]], mut taken: impl FnMut(usiz
                 .iter()
                 .map(|t| min_angle_2d(p2[t[0]], p2[t[1]], p2[t[2]]))
                 .fold(f64::INFINITY, f64::min)
-                - if taken(d0, d1) { 10.0 } else { 0.0 };
+                - if taken(d0, d1) { 10.0 } else { 0.0 }
+                - if through.is_some_and(|k| k != d0 && k != d1) { 5.0 } else { 0.0 };
             if best.is_none_or(|(bq, _)| q > bq + 1e-9 * bq.abs() + 1e-300) {
                 best = Some((q, tris));
             }
@@ -161,6 +174,15 @@ mod tests {
         let total: f64 = t.iter().map(|&t| area2(&p, t)).sum();
         assert!((total - 6.0).abs() < 1e-12, "twice the L area is 6, got {total}");
         assert!(t.iter().all(|&t| area2(&p, t) > 0.0));
+    }
+
+    #[test]
+    fn a_quad_splits_through_the_requested_corner() {
+        let p = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+        for k in 0..4 {
+            let t = triangulate_polygon_with(&p, |_, _| false, Some(k));
+            assert!(t.iter().all(|tri| tri.contains(&k)), "{k}: {t:?}");
+        }
     }
 
     #[test]
