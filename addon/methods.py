@@ -64,6 +64,28 @@ class OptionInfo:
     to_core: Callable[[Any], Any] = lambda value: value
 
 
+def _iterations(description: str, default: int, soft_max: int) -> OptionInfo:
+    """An iteration limit (keyword ``max_iterations``)."""
+    return OptionInfo(
+        "max_iterations",
+        lambda: IntProperty(name="Iterations", description=description, default=default,
+                            min=1, soft_max=soft_max),
+    )
+
+
+def _tolerance(description: str, default: int, lowest: int = -15, highest: int = -1) -> OptionInfo:
+    """A tolerance given as a power of ten (keyword ``tolerance``)."""
+    return OptionInfo(
+        "tolerance",
+        lambda: IntProperty(name="Tolerance (10^x)",
+                            description=f"{description}, as a power of ten",
+                            default=default, min=lowest, max=highest),
+        lambda exponent: 10.0 ** int(exponent),
+    )
+
+
+_ENERGY_CHANGE = "Stop when the energy decreases by less than this (relative)"
+
 OPTIONS: dict[str, OptionInfo] = {
     "boundary": OptionInfo(
         "boundary",
@@ -78,23 +100,9 @@ OPTIONS: dict[str, OptionInfo] = {
             default="circle",
         ),
     ),
-    "max_iterations": OptionInfo(
-        "max_iterations",
-        lambda: IntProperty(
-            name="Iterations",
-            description="Maximum iterations of the eigen solver",
-            default=200, min=1, soft_max=5000,
-        ),
-    ),
-    "tolerance_exponent": OptionInfo(
-        "tolerance",
-        lambda: IntProperty(
-            name="Tolerance (10^x)",
-            description="Convergence tolerance of the eigen solver, as a power of ten",
-            default=-10, min=-16, max=-1,
-        ),
-        lambda exponent: 10.0 ** int(exponent),
-    ),
+    "max_iterations": _iterations("Maximum iterations of the eigen solver", 200, 5000),
+    "tolerance_exponent": _tolerance(
+        "Convergence tolerance of the eigen solver (change of the normalised iterate)", -10, -16),
     "abf_solver": OptionInfo(
         "solver",
         lambda: EnumProperty(
@@ -116,99 +124,26 @@ OPTIONS: dict[str, OptionInfo] = {
             default="free",
         ),
     ),
-    "abf_max_iterations": OptionInfo(
-        "max_iterations",
-        lambda: IntProperty(
-            name="Iterations",
-            description="Maximum Newton iterations of the angle solve (a chart that does not "
-                        "converge falls back to LSCM)",
-            default=30, min=1, soft_max=200,
-        ),
-    ),
-    "abf_tolerance_exponent": OptionInfo(
-        "tolerance",
-        lambda: IntProperty(
-            name="Tolerance (10^x)",
-            description="Largest violation of the angle constraints accepted, as a power of ten",
-            default=-9, min=-14, max=-3,
-        ),
-        lambda exponent: 10.0 ** int(exponent),
-    ),
-    "arap_iterations": OptionInfo(
-        "max_iterations",
-        lambda: IntProperty(
-            name="Iterations",
-            description="Maximum local/global iterations",
-            default=100, min=1, soft_max=1000,
-        ),
-    ),
-    "arap_tolerance_exponent": OptionInfo(
-        "tolerance",
-        lambda: IntProperty(
-            name="Tolerance (10^x)",
-            description="Stop when the energy changes by less than this (relative), as a power "
-                        "of ten",
-            default=-6, min=-15, max=-1,
-        ),
-        lambda exponent: 10.0 ** int(exponent),
-    ),
-    "slim_iterations": OptionInfo(
-        "max_iterations",
-        lambda: IntProperty(
-            name="Iterations",
-            description="Maximum SLIM iterations (each one a reweighted solve and a flip-free "
-                        "line search)",
-            default=15, min=1, soft_max=500,
-        ),
-    ),
-    "slim_tolerance_exponent": OptionInfo(
-        "tolerance",
-        lambda: IntProperty(
-            name="Tolerance (10^x)",
-            description="Stop when the energy decreases by less than this (relative), as a "
-                        "power of ten",
-            default=-5, min=-15, max=-1,
-        ),
-        lambda exponent: 10.0 ** int(exponent),
-    ),
-    "mips_iterations": OptionInfo(
-        "max_iterations",
-        lambda: IntProperty(
-            name="Iterations",
-            description="Maximum Newton iterations (each one a projected-Hessian solve and a "
-                        "flip-free line search)",
-            default=50, min=1, soft_max=500,
-        ),
-    ),
-    "mips_tolerance_exponent": OptionInfo(
-        "tolerance",
-        lambda: IntProperty(
-            name="Tolerance (10^x)",
-            description="Stop when the energy decreases by less than this (relative), as a "
-                        "power of ten",
-            default=-6, min=-15, max=-1,
-        ),
-        lambda exponent: 10.0 ** int(exponent),
-    ),
-    "scaffold_iterations": OptionInfo(
-        "max_iterations",
-        lambda: IntProperty(
-            name="Iterations",
-            description="Maximum iterations (each one a scaffold rebuild, a reweighted solve "
-                        "and a flip-free line search)",
-            default=100, min=1, soft_max=1000,
-        ),
-    ),
-    "scaffold_tolerance_exponent": OptionInfo(
-        "tolerance",
-        lambda: IntProperty(
-            name="Tolerance (10^x)",
-            description="Stop when the energy decreases by less than this (relative), as a "
-                        "power of ten",
-            default=-6, min=-15, max=-1,
-        ),
-        lambda exponent: 10.0 ** int(exponent),
-    ),
+    "abf_max_iterations": _iterations(
+        "Maximum Newton iterations of the angle solve (a chart that does not converge falls "
+        "back to LSCM)", 30, 200),
+    "abf_tolerance_exponent": _tolerance(
+        "Largest violation of the angle constraints accepted", -9, -14, -3),
+    "arap_iterations": _iterations("Maximum local/global iterations", 100, 1000),
+    "arap_tolerance_exponent": _tolerance(
+        "Stop when the energy changes by less than this (relative)", -6),
+    "slim_iterations": _iterations(
+        "Maximum SLIM iterations (each one a reweighted solve and a flip-free line search)",
+        15, 500),
+    "slim_tolerance_exponent": _tolerance(_ENERGY_CHANGE, -5),
+    "mips_iterations": _iterations(
+        "Maximum Newton iterations (each one a projected-Hessian solve and a flip-free line "
+        "search)", 50, 500),
+    "mips_tolerance_exponent": _tolerance(_ENERGY_CHANGE, -6),
+    "scaffold_iterations": _iterations(
+        "Maximum iterations (each one a scaffold rebuild, a reweighted solve and a flip-free "
+        "line search)", 100, 1000),
+    "scaffold_tolerance_exponent": _tolerance(_ENERGY_CHANGE, -6),
 }
 
 
