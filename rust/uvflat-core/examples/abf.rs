@@ -1,5 +1,12 @@
 //! Time ABF++ (and optionally plain ABF) per chart and end to end:
-//! `cargo run --release --example abf -- MESH.off [abf|abf++] [free|convex]`.
+//! `cargo run --release --example abf -- MESH.off [abf|abf++] [free|convex] [SUBDIVISIONS] [seq|par]`.
+//!
+//! SUBDIVISIONS (default 0) splits every triangle into four at its edge midpoints that many
+//! times (camelhead: 1 → 90,816, 2 → 363,264, 3 → 1,453,056 triangles); `par` sets faer's
+//! global parallelism for the per-chart angle timings (it affects the plain ABF LU solver
+//! only: the ABF++ reduced system is factored sequentially, which measured faster).
+//! Prints wall and CPU time (all threads) and the peak resident memory (VmHWM) at the end.
+//! `ABF_REPS=N` repeats each per-chart angle solve N times and reports the fastest.
 #[path = "../tests/common/mod.rs"]
 mod common;
 
@@ -20,31 +27,86 @@ fn main() {
         _ => AbfBoundary::Free,
     };
     let opts = AbfOptions { solver, boundary, ..Default::default() };
-    let s = common::load(std::path::Path::new(&path));
-    faer::set_global_parallelism(faer::Par::Seq);
+    let levels: usize = std::env::args().nth(4).map(|a| a.parse().expect("subdivisions")).unwrap_or(0);
+    let par = std::env::args().nth(5).as_deref() == Some("par");
+    let mut s = common::load(std::path::Path::new(&path));
+    for _ in 0..levels {
+        s = subdivide(&s);
+    }
+    println!("{} faces, {} vertices", s.face_sizes.len(), s.positions.len());
+    faer::set_global_parallelism(if par { faer::Par::rayon(0) } else { faer::Par::Seq });
     let mesh = PolyMesh::new(&s.positions, &s.corner_verts, &s.face_sizes).unwrap();
     let charts = build_charts(&mesh, &[], None);
+    let reps: usize = std::env::var("ABF_REPS").ok().and_then(|x| x.parse().ok()).unwrap_or(1);
     for c in charts.iter().filter(|c| c.defect.is_none() && !c.boundary_loops.is_empty()).take(3) {
-        let t = Instant::now();
-        let a = abf::solve_angles(c, &opts);
-        let dt = t.elapsed().as_secs_f64();
+        let (mut dt, mut dcpu, mut a) = (f64::INFINITY, f64::INFINITY, None);
+        for _ in 0..reps {
+            let t = Instant::now();
+            let cpu0 = cpu_seconds();
+            a = Some(abf::solve_angles(c, &opts));
+            dt = dt.min(t.elapsed().as_secs_f64());
+            dcpu = dcpu.min(cpu_seconds() - cpu0);
+        }
+        let a = a.expect("one repetition");
         match a {
             Ok(a) => println!(
-                "chart {} tris: {} iters, residual {:.2e}, stationarity {:.2e}, converged {}, active {}, {dt:.4} s",
+                "chart {} tris: {} iters, residual {:.2e}, stationarity {:.2e}, converged {}, active {}, {dt:.4} s (cpu {dcpu:.4} s)",
                 c.triangles.len(), a.iterations, a.residual, a.stationarity, a.converged, a.convex_active.len()
             ),
             Err(e) => println!("chart {} tris: error {e:?}", c.triangles.len()),
         }
     }
-    for _ in 0..3 {
+    for _ in 0..if levels > 0 { 1 } else { 3 } {
         let t = Instant::now();
+        let cpu0 = cpu_seconds();
         let r = unwrap(&s.input(), &UnwrapOptions { method: Method::Abf(opts), ..Default::default() }).unwrap();
         let dt = t.elapsed().as_secs_f64();
+        let dcpu = cpu_seconds() - cpu0;
         let flips: usize = r.charts.iter().map(|c| c.flips).sum();
         let c = &r.charts[0];
         println!(
-            "unwrap {:?} {}: {dt:.4} s, {} charts, flips {flips}, chart0 {:?} iters {} residual {:.2e} overlap {} conformal {:.4} reason {:?}",
+            "unwrap {:?} {}: {dt:.4} s (cpu {dcpu:.4} s), {} charts, flips {flips}, chart0 {:?} iters {} residual {:.2e} overlap {} conformal {:.4} reason {:?}",
             opts.solver, opts.boundary.name(), r.charts.len(), c.status, c.iterations, c.residual, c.overlap, c.distortion.conformal, c.reason
         );
     }
+    let status = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
+    if let Some(line) = status.lines().find(|l| l.starts_with("VmHWM")) {
+        println!("peak memory {line}");
+    }
+}
+
+/// CPU time of all threads of this process so far (scheduler statistics, nanoseconds): a
+/// timing that other processes on a busy machine do not inflate.
+fn cpu_seconds() -> f64 {
+    let mut ns = 0u64;
+    if let Ok(dir) = std::fs::read_dir("/proc/self/task") {
+        for t in dir.flatten() {
+            if let Ok(s) = std::fs::read_to_string(t.path().join("schedstat")) {
+                ns += s.split_whitespace().next().and_then(|x| x.parse::<u64>().ok()).unwrap_or(0);
+            }
+        }
+    }
+    ns as f64 * 1e-9
+}
+
+/// Split every triangle into four at its edge midpoints (triangle meshes only).
+fn subdivide(s: &common::Soup) -> common::Soup {
+    assert!(s.face_sizes.iter().all(|&k| k == 3), "subdivision needs a triangle mesh");
+    let mut positions = s.positions.clone();
+    let mut mid = std::collections::HashMap::new();
+    let mut corner_verts = Vec::with_capacity(4 * s.corner_verts.len());
+    for t in s.corner_verts.chunks_exact(3) {
+        let mut m = [0u32; 3];
+        for k in 0..3 {
+            let (a, b) = (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3]));
+            m[k] = *mid.entry((a, b)).or_insert_with(|| {
+                let (p, q) = (positions[a as usize], positions[b as usize]);
+                positions.push([(p[0] + q[0]) / 2.0, (p[1] + q[1]) / 2.0, (p[2] + q[2]) / 2.0]);
+                (positions.len() - 1) as u32
+            });
+        }
+        corner_verts.extend_from_slice(&[t[0], m[0], m[2], m[0], t[1], m[1], m[2], m[1], t[2], m[0], m[1], m[2]]);
+    }
+    let face_sizes = vec![3; corner_verts.len() / 3];
+    common::Soup { positions, corner_verts, face_sizes }
 }
