@@ -268,3 +268,49 @@ fn a_chart_that_does_not_converge_falls_back_to_lscm_and_says_so() {
     let reason = c.reason.as_deref().unwrap();
     assert!(reason.starts_with("abf did not converge: residual") && reason.contains("after 1 iterations"), "{reason}");
 }
+
+/// Prescribed boundary angle sums: π/2 at four boundary vertices and π at every other one
+/// (Gauss–Bonnet: Σ (π − sum) = 2π) flatten a disk onto a rectangle.
+#[test]
+fn prescribed_boundary_sums_make_a_rectangle() {
+    use uvflat_core::charts::build_charts;
+    use uvflat_core::mesh::PolyMesh;
+    use uvflat_core::methods::abf::{solve_angles_with_sums, solve_with_sums, AbfOptions};
+    let s = common::planar_disk(7, 6);
+    let mesh = PolyMesh::new(&s.positions, &s.corner_verts, &s.face_sizes).unwrap();
+    let chart = build_charts(&mesh, &[], None).remove(0);
+    let outer = &chart.boundary_loops[chart.outer_loop().unwrap()];
+    let m = outer.len();
+    let corners: Vec<u32> = (0..4).map(|k| outer[k * m / 4]).collect();
+    let prescribed: Vec<(u32, f64)> = outer
+        .iter()
+        .map(|&v| (v, if corners.contains(&v) { std::f64::consts::FRAC_PI_2 } else { std::f64::consts::PI }))
+        .collect();
+    let opts = AbfOptions::default();
+    let a = solve_angles_with_sums(&chart, &opts, &prescribed).unwrap();
+    assert!(a.converged, "residual {}", a.residual);
+    // The sums hold (independently of the solver's own residual).
+    let mut sum = vec![0.0; chart.positions.len()];
+    for (t, al) in chart.triangles.iter().zip(&a.alpha) {
+        for k in 0..3 {
+            sum[t[k] as usize] += al[k];
+        }
+    }
+    for &(v, target) in &prescribed {
+        assert!((sum[v as usize] - target).abs() < 1e-9, "vertex {v}: {} vs {target}", sum[v as usize]);
+    }
+    // The reconstruction has a rectangular outline: boundary turning angles match.
+    let sol = solve_with_sums(&chart, &[], &opts, &prescribed).unwrap();
+    assert!(sol.fallback.is_none());
+    let uv = &sol.uv;
+    for i in 0..m {
+        let (p, c, n) = (uv[outer[(i + m - 1) % m] as usize], uv[outer[i] as usize], uv[outer[(i + 1) % m] as usize]);
+        let (a1, a2) = ([p[0] - c[0], p[1] - c[1]], [n[0] - c[0], n[1] - c[1]]);
+        // Interior angle at c: the chart lies left of p → c → n, i.e. counter-clockwise from
+        // the edge towards n round to the edge towards p.
+        let ang = (a2[0] * a1[1] - a2[1] * a1[0]).atan2(a1[0] * a2[0] + a1[1] * a2[1]);
+        let ang = if ang < 0.0 { ang + std::f64::consts::TAU } else { ang };
+        let want = if corners.contains(&outer[i]) { std::f64::consts::FRAC_PI_2 } else { std::f64::consts::PI };
+        assert!((ang - want).abs() < 1e-6, "boundary vertex {i}: angle {ang} vs {want}");
+    }
+}

@@ -239,17 +239,19 @@ struct Problem<'a> {
 }
 
 impl<'a> Problem<'a> {
-    fn new(tris: &'a [[u32; 3]], beta: Vec<f64>, interior: &[bool], convex_active: &[bool]) -> Self {
+    /// `sum_target[v]`: the angle sum vertex `v` must reach (2π at interior vertices unless
+    /// prescribed, π at active convex-boundary vertices, any prescribed value), or `None`.
+    fn new(tris: &'a [[u32; 3]], beta: Vec<f64>, interior: &[bool], sum_target: &[Option<f64>]) -> Self {
         let n = interior.len();
         let mut sum_row = vec![u32::MAX; n];
         let mut wheel_row = vec![u32::MAX; n];
         let mut rows = Vec::new();
         let mut target = Vec::new();
         for v in 0..n {
-            if interior[v] || convex_active[v] {
+            if let Some(t) = sum_target[v] {
                 sum_row[v] = rows.len() as u32;
                 rows.push(Row { vertex: v as u32, wheel: false });
-                target.push(if interior[v] { 2.0 * PI } else { PI });
+                target.push(t);
             }
             if interior[v] {
                 wheel_row[v] = rows.len() as u32;
@@ -841,8 +843,17 @@ fn apply_step(p: &Problem<'_>, s: &mut State, (steps, dl): &Step) {
 
 /// Targets β: the clamped 3D angles, scaled at every interior vertex to sum to 2π.
 pub fn target_angles(chart: &Chart) -> Vec<[f64; 3]> {
+    target_angles_with_sums(chart, &[])
+}
+
+/// Targets β scaled at every interior vertex to 2π, and at every vertex of `prescribed`
+/// (chart vertex, angle sum) to its prescribed sum.
+pub fn target_angles_with_sums(chart: &Chart, prescribed: &[(u32, f64)]) -> Vec<[f64; 3]> {
     let mut beta = chart_angles(&chart.positions, &chart.triangles);
-    let interior: Vec<bool> = chart.boundary_mask().iter().map(|b| !b).collect();
+    let mut goal: Vec<Option<f64>> = chart.boundary_mask().iter().map(|&b| if b { None } else { Some(2.0 * PI) }).collect();
+    for &(v, t) in prescribed {
+        goal[v as usize] = Some(t);
+    }
     let mut sum = vec![0.0; chart.positions.len()];
     for (t, a) in chart.triangles.iter().zip(&beta) {
         for k in 0..3 {
@@ -852,8 +863,8 @@ pub fn target_angles(chart: &Chart) -> Vec<[f64; 3]> {
     for (t, a) in chart.triangles.iter().zip(beta.iter_mut()) {
         for k in 0..3 {
             let v = t[k] as usize;
-            if interior[v] && sum[v] > 0.0 {
-                a[k] *= 2.0 * PI / sum[v];
+            if let (Some(g), true) = (goal[v], sum[v] > 0.0) {
+                a[k] *= g / sum[v];
             }
         }
     }
@@ -879,10 +890,46 @@ fn vertex_sums(chart: &Chart, alpha: &[f64]) -> Vec<f64> {
 /// Failures: a linear system that cannot be factored (singular, or for ABF++ not positive
 /// definite), reported as a [`ChartFailure`].
 pub fn solve_angles(chart: &Chart, options: &AbfOptions) -> Result<AbfAngles, ChartFailure> {
+    solve_angles_with_sums(chart, options, &[])
+}
+
+/// [`solve_angles`] with prescribed angle sums at chosen chart vertices: `(chart vertex, sum)`.
+///
+/// At an interior vertex the sum replaces 2π (a cone singularity in the sense of Kharevych,
+/// Springborn, Schröder 2006: a sum other than 2π cannot be flattened without a cut through
+/// it, so the LSCM reconstruction is then least squares); at a boundary vertex it constrains
+/// the boundary angle (π keeps the boundary straight there, π/2 makes a right-angled corner).
+/// Prescribed boundary vertices are never released by the convex-boundary active set.
+///
+/// Preconditions: as [`solve_angles`]; every sum in (0, 2π·valence) and finite (a sum the
+/// triangles cannot reach leaves the solve unconverged, and the caller falls back). For a
+/// flat disk, Gauss–Bonnet requires Σ over boundary vertices of (π − sum) = 2π; when every
+/// boundary vertex is prescribed, one of them (the last given) is implied and left free.
+pub fn solve_angles_with_sums(
+    chart: &Chart,
+    options: &AbfOptions,
+    prescribed: &[(u32, f64)],
+) -> Result<AbfAngles, ChartFailure> {
     let tris = &chart.triangles;
     let nf = tris.len();
     let n = chart.positions.len();
-    let beta3 = target_angles(chart);
+    let mut fixed_sum: Vec<Option<f64>> = vec![None; n];
+    for &(v, t) in prescribed {
+        if (v as usize) < n && t.is_finite() && t > 0.0 {
+            fixed_sum[v as usize] = Some(t);
+        }
+    }
+    // With every vertex's sum fixed, the vertex sums and the triangle sums both add up to the
+    // total angle: one constraint is redundant and the reduced system singular. The last
+    // prescribed boundary vertex is then left free (its sum follows from the others when they
+    // are consistent; Gauss–Bonnet for a flat disk).
+    let boundary = chart.boundary_mask();
+    if (0..n).all(|v| !boundary[v] || fixed_sum[v].is_some()) {
+        if let Some(&(v, _)) = prescribed.iter().rev().find(|&&(v, _)| boundary.get(v as usize) == Some(&true)) {
+            fixed_sum[v as usize] = None;
+        }
+    }
+    let beta3 = target_angles_with_sums(chart, prescribed);
     let beta: Vec<f64> = beta3.iter().flatten().copied().collect();
     let interior: Vec<bool> = chart.boundary_mask().iter().map(|b| !b).collect();
     let mut active = vec![false; n];
@@ -895,7 +942,18 @@ pub fn solve_angles(chart: &Chart, options: &AbfOptions) -> Result<AbfAngles, Ch
     let mut factorizations = 0;
     let mut rounds = 0;
     let (converged, mut residual, stationarity) = loop {
-        let p = Problem::new(tris, beta.clone(), &interior, &active);
+        let sum_target: Vec<Option<f64>> = (0..n)
+            .map(|v| {
+                fixed_sum[v].or(if interior[v] {
+                    Some(2.0 * PI)
+                } else if active[v] {
+                    Some(PI)
+                } else {
+                    None
+                })
+            })
+            .collect();
+        let p = Problem::new(tris, beta.clone(), &interior, &sum_target);
         let run = newton(&p, &mut s, options).map_err(|e| ChartFailure(format!("abf: {e}")))?;
         iterations += run.iterations;
         factorizations += run.factorizations;
@@ -908,6 +966,9 @@ pub fn solve_angles(chart: &Chart, options: &AbfOptions) -> Result<AbfAngles, Ch
         let mut changed = false;
         for &v in &outer {
             let v = v as usize;
+            if fixed_sum[v].is_some() {
+                continue;
+            }
             if !active[v] && sums[v] > PI + options.tolerance {
                 active[v] = true;
                 s.lam_sum[v] = 0.0;
@@ -928,7 +989,9 @@ pub fn solve_angles(chart: &Chart, options: &AbfOptions) -> Result<AbfAngles, Ch
     if !outer.is_empty() {
         let sums = vertex_sums(chart, &s.alpha);
         for &v in &outer {
-            residual = residual.max(sums[v as usize] - PI);
+            if fixed_sum[v as usize].is_none() {
+                residual = residual.max(sums[v as usize] - PI);
+            }
         }
     }
     let alpha: Vec<[f64; 3]> = s.alpha.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
@@ -943,7 +1006,17 @@ pub fn solve_angles(chart: &Chart, options: &AbfOptions) -> Result<AbfAngles, Ch
 /// angles outside (0, π)), the chart is mapped by plain LSCM with its 3D angles and the
 /// solution carries a [`Fallback`] saying why. Failures: those of the LSCM solve.
 pub fn solve(chart: &Chart, pins: &[(u32, [f64; 2])], options: &AbfOptions) -> Result<ChartSolution, ChartFailure> {
-    let reason = match solve_angles(chart, options) {
+    solve_with_sums(chart, pins, options, &[])
+}
+
+/// [`solve`] with prescribed angle sums (see [`solve_angles_with_sums`]).
+pub fn solve_with_sums(
+    chart: &Chart,
+    pins: &[(u32, [f64; 2])],
+    options: &AbfOptions,
+    prescribed: &[(u32, f64)],
+) -> Result<ChartSolution, ChartFailure> {
+    let reason = match solve_angles_with_sums(chart, options, prescribed) {
         Ok(a) => {
             let valid = a.alpha.iter().flatten().all(|&x| x > 0.0 && x < PI);
             if a.converged && valid {
