@@ -35,15 +35,17 @@ def parse_args(argv):
     parser.add_argument("output", type=Path, help=".obj, .glb or .blend")
     parser.add_argument("--method", default="lscm",
                         help="uvflat method (tutte, harmonic, mean_value, lscm, spectral, ...)")
-    parser.add_argument("--boundary", choices=("circle", "square", "free", "convex"), default=None,
-                        help="tutte/harmonic/mean_value: circle or square (default circle); "
-                             "abf: free or convex (default free)")
+    parser.add_argument("--boundary", choices=("circle", "square", "virtual", "free", "convex"),
+                        default=None,
+                        help="tutte/harmonic/mean_value: circle, square or virtual (default "
+                             "circle); abf: free or convex (default free)")
     parser.add_argument("--solver", choices=("abf++", "abf"), default=None,
                         help="abf: ABF++ block elimination or the plain ABF system (default abf++)")
     parser.add_argument("--max-iterations", type=int, default=None,
-                        help="spectral / abf: most iterations (default: the method's)")
+                        help="iterative methods: most iterations (default: the method's)")
     parser.add_argument("--tolerance-exponent", type=int, default=None,
-                        help="spectral / abf: tolerance as a power of ten (default: the method's)")
+                        help="iterative methods: tolerance as a power of ten (default: the "
+                             "method's)")
     parser.add_argument("--seams-from-islands", action="store_true",
                         help="mark seams from the islands of the input's active UV map first")
     parser.add_argument("--no-pack", action="store_true",
@@ -88,20 +90,23 @@ def main(argv=None):
     known = [m.id for m in addon.methods.METHODS if m.id in uvflat.METHODS]
     if args.method not in known:
         raise SystemExit(f"unknown method {args.method!r}; available: {', '.join(known)}")
-    # command-line options onto the operator properties of the chosen method (keys of OPTIONS)
-    given = {"boundary": args.boundary, "abf_boundary": args.boundary, "abf_solver": args.solver,
-             "max_iterations": args.max_iterations, "abf_max_iterations": args.max_iterations,
-             "tolerance_exponent": args.tolerance_exponent,
-             "abf_tolerance_exponent": args.tolerance_exponent}
-    method_props = {key: given[key] for key in addon.methods.METHOD_BY_ID[args.method].options
-                    if given.get(key) is not None}
+    # command-line options onto the operator properties of the chosen method, matched by the
+    # keyword each property hands to uvflat.unwrap (tolerances are given as powers of ten)
+    by_keyword = {"boundary": args.boundary, "solver": args.solver,
+                  "max_iterations": args.max_iterations, "tolerance": args.tolerance_exponent}
+    method_props = {}
+    for key in addon.methods.METHOD_BY_ID[args.method].options:
+        value = by_keyword.get(addon.methods.OPTIONS[key].keyword)
+        if value is not None:
+            method_props[key] = value
     try:
         for key, value in method_props.items():
             # validate enum values against the property definition before touching the mesh
             prop = addon.methods.OPTIONS[key].make_property()
             items = getattr(prop, "keywords", {}).get("items")
             if items and value not in [i[0] for i in items]:
-                raise ValueError(f"--{key.removeprefix('abf_').replace('_', '-')} {value!r} "
+                flag = addon.methods.OPTIONS[key].keyword.replace("_", "-")
+                raise ValueError(f"--{flag} {value!r} "
                                  f"is not an option of {args.method}: {[i[0] for i in items]}")
     except ValueError as ex:
         raise SystemExit(str(ex)) from None
