@@ -70,16 +70,11 @@ pub const SCAFFOLD_WEIGHT: f64 = 0.01;
 /// Points per side of the box (corners included once).
 const BOX_POINTS_PER_SIDE: usize = 8;
 
-/// Symmetric Dirichlet density ‖J‖² (1 + 1/det²) of a Jacobian (+∞ unless det J > 0); 4 for
-/// a rotation.
+/// Symmetric Dirichlet density ‖J‖² (1 + 1/det²) of a row-major Jacobian (+∞ unless
+/// det J > 0); 4 for a rotation. The same density as SLIM's ([`super::slim`]).
 #[inline]
 pub fn symmetric_dirichlet_density(j: [f64; 4]) -> f64 {
-    let det = j[0] * j[3] - j[1] * j[2];
-    if det > 0.0 {
-        (j[0] * j[0] + j[1] * j[1] + j[2] * j[2] + j[3] * j[3]) * (1.0 + 1.0 / (det * det))
-    } else {
-        f64::INFINITY
-    }
+    super::slim::density([[j[0], j[1]], [j[2], j[3]]])
 }
 
 /// Weighted symmetric Dirichlet Σ w_t D(J_t) of a set of triangles (+∞ on a non-positive one).
@@ -97,32 +92,11 @@ fn weighted_energy(rest: &[RestTriangle], weight: &[f64], triangles: &[[u32; 3]]
         .sum()
 }
 
-/// The SLIM proxy of one triangle: K = W² (symmetric 2×2, as [k00, k01, k11]) and P = K R.
+/// The SLIM proxy of one triangle (row-major Jacobian): K = W² (symmetric 2×2, as
+/// [k00, k01, k11]) and P = K R, exactly SLIM's local step ([`super::slim`]).
 fn slim_proxy(j: [f64; 4]) -> ([f64; 3], [f64; 4]) {
-    // Closest rotation (det J > 0): the normalised conformal part of J.
-    let (e, h) = (0.5 * (j[0] + j[3]), 0.5 * (j[2] - j[1]));
-    let l = e.hypot(h);
-    let r = if l > 0.0 { [e / l, -h / l, h / l, e / l] } else { [1.0, 0.0, 0.0, 1.0] };
-    // M = J Jᵀ = U Σ² Uᵀ; K = U diag(w(σ1)², w(σ2)²) Uᵀ with w(σ)² = (σ + 1)(σ² + 1)/σ³, the
-    // SLIM weight of symmetric Dirichlet (σ² + σ⁻²). K = αI + βM interpolates on the spectrum.
-    let m = [j[0] * j[0] + j[1] * j[1], j[0] * j[2] + j[1] * j[3], j[2] * j[2] + j[3] * j[3]];
-    let tr = m[0] + m[2];
-    let dd = ((0.5 * (m[0] - m[2])).powi(2) + m[1] * m[1]).sqrt();
-    let (l1, l2) = ((0.5 * tr + dd).max(1e-300), (0.5 * tr - dd).max(1e-300));
-    let wsq = |lam: f64| {
-        let s = lam.sqrt();
-        (s + 1.0) * (s * s + 1.0) / (s * s * s)
-    };
-    let (k1, k2) = (wsq(l1), wsq(l2));
-    let (alpha, beta) = if l1 - l2 > 1e-12 * l1 {
-        let beta = (k1 - k2) / (l1 - l2);
-        (k1 - beta * l1, beta)
-    } else {
-        (0.5 * (k1 + k2), 0.0)
-    };
-    let k = [alpha + beta * m[0], beta * m[1], alpha + beta * m[2]];
-    let p = [k[0] * r[0] + k[1] * r[2], k[0] * r[1] + k[1] * r[3], k[1] * r[0] + k[2] * r[2], k[1] * r[1] + k[2] * r[3]];
-    (k, p)
+    let (k, p) = super::slim::reweight([[j[0], j[1]], [j[2], j[3]]]);
+    (k, [p[0][0], p[0][1], p[1][0], p[1][1]])
 }
 
 /// The scaffold of one iteration.

@@ -109,17 +109,21 @@ pub fn symmetric_dirichlet(ops: &TriangleOperators, triangles: &[[u32; 3]], uv: 
         .par_iter()
         .enumerate()
         .with_min_len(2048)
-        .map(|(f, t)| {
-            let j = ops.jacobian(f, t, uv);
-            let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
-            if det <= 0.0 || det.is_nan() {
-                return f64::INFINITY;
-            }
-            let fro = j[0][0] * j[0][0] + j[0][1] * j[0][1] + j[1][0] * j[1][0] + j[1][1] * j[1][1];
-            ops.area[f] * fro * (1.0 + 1.0 / (det * det))
-        })
+        .map(|(f, t)| ops.area[f] * density(ops.jacobian(f, t, uv)))
         .sum();
     e / (4.0 * ops.total_area)
+}
+
+/// Symmetric Dirichlet density ‖J‖² (1 + 1/det²) = σ1² + σ2² + σ1⁻² + σ2⁻² of one Jacobian;
+/// 4 for a rotation, `+∞` unless det J > 0. Shared with the scaffold method.
+#[inline]
+pub(crate) fn density(j: [[f64; 2]; 2]) -> f64 {
+    let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+    if !(det > 0.0) {
+        return f64::INFINITY;
+    }
+    let fro = j[0][0] * j[0][0] + j[0][1] * j[0][1] + j[1][0] * j[1][0] + j[1][1] * j[1][1];
+    fro * (1.0 + 1.0 / (det * det))
 }
 
 /// Scale `uv` about the origin by the factor minimising the symmetric Dirichlet energy
@@ -145,8 +149,9 @@ fn scale_optimally(ops: &TriangleOperators, triangles: &[[u32; 3]], uv: &mut [[f
 }
 
 /// Per-triangle local step: `W²` (symmetric, as `[m00, m01, m11]`) and `W² R` (row-major).
+/// Shared with the scaffold method.
 #[inline]
-fn reweight(j: [[f64; 2]; 2]) -> ([f64; 3], [[f64; 2]; 2]) {
+pub(crate) fn reweight(j: [[f64; 2]; 2]) -> ([f64; 3], [[f64; 2]; 2]) {
     let (a, b, c, d) = (j[0][0], j[0][1], j[1][0], j[1][1]);
     // Singular values (det > 0 on a valid map, so q > r).
     let q = (0.5 * (a + d)).hypot(0.5 * (c - b));
