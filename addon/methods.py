@@ -135,7 +135,7 @@ OPTIONS: dict[str, OptionInfo] = {
     "slim_iterations": _iterations(
         "Maximum SLIM iterations (each one a reweighted solve and a flip-free line search)",
         15, 500),
-    "slim_tolerance_exponent": _tolerance(_ENERGY_CHANGE, -5),
+    "slim_tolerance_exponent": _tolerance(_ENERGY_CHANGE, -4),
     "mips_iterations": _iterations(
         "Maximum Newton iterations (each one a projected-Hessian solve and a flip-free line "
         "search)", 50, 500),

@@ -8,6 +8,8 @@
 //! with K = 2 has about 360k triangles). Prints, per SLIM iteration, the energy (symmetric
 //! Dirichlet per unit area, 1 is perfect), the accepted step and the seconds spent in assembly
 //! (local step + matrix values + right-hand side), numeric factorisation, solve and line search.
+//! Factorisations are sequential, as in `unwrap`; with `FAER_PAR=1` in the environment they use
+//! faer's parallel (rayon) kernels instead.
 #[path = "../tests/common/mod.rs"]
 mod common;
 
@@ -60,7 +62,7 @@ fn main() {
     if flag("--start").as_deref() == Some("mean_value") {
         options.start = slim::SlimStart::MeanValue;
     }
-    faer::set_global_parallelism(faer::Par::Seq);
+    faer::set_global_parallelism(if std::env::var("FAER_PAR").is_ok() { faer::Par::rayon(0) } else { faer::Par::Seq });
     let mesh = PolyMesh::new(&soup.positions, &soup.corner_verts, &soup.face_sizes).unwrap();
     let charts = build_charts(&mesh, &[], None);
     let chart = charts.iter().max_by_key(|c| c.triangles.len()).unwrap();

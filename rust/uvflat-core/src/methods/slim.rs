@@ -73,7 +73,10 @@ pub struct SlimOptions {
     /// Most iterations. Default 15 (on camelhead, from the mean value start, enough to reach a
     /// lower symmetric Dirichlet than Blender's MINIMUM_STRETCH unwrap).
     pub max_iterations: usize,
-    /// Stop when the energy decreases by less than this, relative. Default 1e-5.
+    /// Stop when the energy decreases by less than this, relative. Default 1e-4: on every disk
+    /// mesh of the test set and on Suzanne with her seams, the symmetric Dirichlet reached is
+    /// below that of Blender's MINIMUM_STRETCH unwrap, in 10–40% fewer iterations than 1e-5
+    /// (1e-3 stops above it on camelhead).
     pub tolerance: f64,
     /// Starting map. Default [`SlimStart::Auto`].
     pub start: SlimStart,
@@ -81,7 +84,7 @@ pub struct SlimOptions {
 
 impl Default for SlimOptions {
     fn default() -> Self {
-        SlimOptions { max_iterations: 15, tolerance: 1e-5, start: SlimStart::Auto }
+        SlimOptions { max_iterations: 15, tolerance: 1e-4, start: SlimStart::Auto }
     }
 }
 
