@@ -11,8 +11,10 @@
 //! E = Σ A_t ‖J_t‖² / det J_t / (2 Σ A_t). It is invariant under similarities of the UVs.
 //!
 //! Minimisation:
-//! * start: mean value weights with the boundary on a circle (Floater 2003): every triangle
-//!   positively oriented, so E is finite;
+//! * start: LSCM ([`super::lscm`]) when every one of its triangles is positively oriented (it
+//!   minimises a conformal energy too, so Newton starts next to the minimiser), otherwise mean
+//!   value weights with the boundary on a circle (Floater 2003): every triangle positively
+//!   oriented, so E is finite;
 //! * Newton direction: the Hessian of f(J) = ‖J‖²/det J with respect to the four entries of J
 //!   is projected onto the positive semidefinite cone per triangle (eigen-decomposition of the
 //!   4×4 matrix, negative eigenvalues set to zero), then pulled back by the linear map from the
@@ -37,7 +39,7 @@ use super::fixed_boundary::{self, Weights};
 use super::{BoundaryShape, ChartFailure, ChartSolution, Fallback};
 use crate::charts::Chart;
 use crate::geometry::{local_frame, triangle_area};
-use crate::solvers::line_search::{flip_free_line_search, LineSearchOptions};
+use crate::solvers::line_search::{all_positive, flip_free_line_search, LineSearchOptions};
 use crate::solvers::{FixedValueSolver, SolveError, Symmetry};
 use rayon::prelude::*;
 
@@ -322,13 +324,23 @@ pub fn solve_with_history(
     options: &MipsOptions,
 ) -> Result<(ChartSolution, Vec<f64>), ChartFailure> {
     super::require_disk(chart)?;
-    let mut uv = flip_free_start(chart)?;
     let tris = &chart.triangles;
     let n = chart.positions.len();
     let rest: Vec<RestTriangle> = tris
         .iter()
         .map(|t| RestTriangle::from_3d([chart.positions[t[0] as usize], chart.positions[t[1] as usize], chart.positions[t[2] as usize]]))
         .collect();
+    // LSCM minimises a conformal energy too, so when it is flip-free it starts Newton next to
+    // the MIPS minimiser; otherwise the mean value map, flip-free by Floater's theorem.
+    let lscm_start = super::lscm::solve_with_angles(chart, &super::chart_angles(&chart.positions, tris), &[])
+        .ok()
+        .map(|(uv, _)| uv)
+        .filter(|uv| all_positive(tris, uv) && mips_energy(&rest, tris, uv).is_finite());
+    let start_name = if lscm_start.is_some() { "lscm" } else { "mean_value" };
+    let mut uv = match lscm_start {
+        Some(uv) => uv,
+        None => flip_free_start(chart)?,
+    };
     let mut energy = mips_energy(&rest, tris, &uv);
     if !energy.is_finite() {
         let mut sol = ChartSolution::direct(uv);
@@ -447,7 +459,11 @@ pub fn solve_with_history(
     let mut sol = ChartSolution::direct(uv);
     sol.iterations = iterations;
     sol.residual = change;
-    sol.note = honour_pins_by_similarity(&mut sol.uv, pins, "MIPS");
+    let started = format!("MIPS energy {energy:.6} after {iterations} iteration(s), started from {start_name}");
+    sol.note = Some(match honour_pins_by_similarity(&mut sol.uv, pins, "MIPS") {
+        Some(pinned) => format!("{started}; {pinned}"),
+        None => started,
+    });
     Ok((sol, history))
 }
 
