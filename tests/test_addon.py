@@ -669,3 +669,38 @@ def test_arap_reports_its_flips_honestly(ext, scene, mesh):
     assert result == {"FINISHED"}, summary
     assert not summary.failed, summary.line()
     check_result(ext, obj, summary, expect_no_flips=False)
+
+
+# ---------------------------------------------------------------------------------------------
+# Quality against Blender's own unwrap (same mesh, same seams, same process; not timed)
+
+# uvflat method, the Blender method of its family, the metric the method minimises.
+ANCHORS = [("slim", "MINIMUM_STRETCH", "symmetric_dirichlet"),
+           ("abf", "ANGLE_BASED", "conformal"),
+           ("lscm", "CONFORMAL", "conformal")]
+
+
+@pytest.mark.parametrize("mesh", ("suzanne", "camelhead.off"))
+@pytest.mark.parametrize("method,blender_method,metric", ANCHORS, ids=[a[0] for a in ANCHORS])
+def test_default_quality_matches_or_beats_blender(ext, scene, mesh, method, blender_method, metric):
+    """With its default options each method reaches at most the distortion (the one it
+    minimises) of Blender's unwrap of the same family, with no more flipped triangles."""
+    import uvflat
+
+    obj = suzanne() if mesh == "suzanne" else shared_mesh(mesh)
+    common.edit_mode([obj])
+    try:
+        assert bpy.ops.uv.unwrap(method=blender_method, margin=0.001) == {"FINISHED"}
+    finally:
+        common.object_mode()
+    data = read(ext, obj)
+    theirs = uvflat.metrics(data.positions, data.corner_verts, data.face_sizes, data.uv)
+    result, summary = unwrap(ext, [obj], method=method, margin=0.001)
+    assert result == {"FINISHED"} and not summary.failed, summary.line()
+    data = read(ext, obj)
+    ours = uvflat.metrics(data.positions, data.corner_verts, data.face_sizes, data.uv)
+    assert ours.charts == theirs.charts
+    assert ours.flips <= theirs.flips, (ours.flips, theirs.flips)
+    assert getattr(ours, metric) <= getattr(theirs, metric) + 1e-4, (
+        f"{method} {metric} {getattr(ours, metric):.5f} vs Blender {blender_method} "
+        f"{getattr(theirs, metric):.5f}")
