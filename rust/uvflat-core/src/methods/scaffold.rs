@@ -33,13 +33,16 @@
 //! Re-meshing: the paper re-meshes the scaffold every iteration. Here a fresh Delaunay
 //! scaffold is taken when it needs no new symbolic analysis, when the previous scaffold
 //! limited the last step (its first degenerating triangle bounded the line search below a full
-//! step), or on the first iteration; otherwise the previous iteration's scaffold is kept. The
+//! step), when the previous one is `STALE_AFTER` (10) iterations old, or on the first
+//! iteration; otherwise the previous iteration's scaffold is kept. The
 //! kept scaffold is a valid triangulation of the free space (the line search kept its triangles
 //! positive and the box is fixed) and its rest shapes are reset to the current ones, so every
 //! iteration minimises the same energy — chart symmetric Dirichlet plus scaffold symmetric
 //! Dirichlet at its minimum — over a valid scaffold, only not always a Delaunay one. Kept
 //! scaffolds get skinnier as the boundary moves, which can only hold the boundary back; that
-//! is what triggers the re-mesh. (On a 22k-triangle chart with a 56-vertex boundary every
+//! is what the re-mesh triggers undo (on a wavy cone whose isometric flattening overlaps
+//! itself, 100 iterations re-meshing at most every 10 end at the energy of re-meshing every
+//! iteration to 1e-5, without the age trigger 9 % further from the isometry). (On a 22k-triangle chart with a 56-vertex boundary every
 //! Delaunay scaffold has the same chords anyway; on a chart with a 1136-vertex boundary nearly
 //! every re-mesh flips a few chords, and keeping the scaffold saves an analysis per
 //! iteration.)
@@ -96,6 +99,8 @@ impl Default for ScaffoldOptions {
 pub const BOX_MARGIN: f64 = 0.5;
 /// Total weight of the scaffold triangles relative to the chart's 3D area.
 pub const SCAFFOLD_WEIGHT: f64 = 0.01;
+/// A scaffold kept this many iterations is re-meshed (see the module docs).
+const STALE_AFTER: usize = 10;
 /// Points per side of the box (corners included once).
 const BOX_POINTS_PER_SIDE: usize = 8;
 
@@ -584,6 +589,7 @@ fn run(
     // after the step (the line search kept all its triangles positive, the box is fixed).
     let mut kept: Option<Scaffold> = None;
     let mut remesh = true;
+    let mut age = 0usize;
     let ls = LineSearchOptions::default();
     let mut change = f64::INFINITY;
     let mut iterations = 0;
@@ -766,6 +772,10 @@ fn run(
         // The scaffold limited the step when its first degenerating triangle set the bound and
         // the trial started below a full step: re-mesh it next iteration.
         remesh = scaffold_flip <= out.flip_step && ls.safety * scaffold_flip < ls.max_step;
+        // A scaffold kept for `STALE_AFTER` iterations is re-meshed too: one that only grows
+        // skinnier slows the boundary down without ever bounding the step.
+        age = if remeshed { 1 } else { age + 1 };
+        remesh |= age >= STALE_AFTER;
         let t6 = Instant::now();
         history.seconds.push([
             (t1 - t0).as_secs_f64(),
@@ -879,10 +889,11 @@ mod tests {
         }
         assert!(hk.remeshed.iter().any(|&r| !r), "the default policy never kept a scaffold");
         assert!(hf.remeshed.iter().all(|&r| r));
-        // Both minimise the same energy from the same start: same result to a small fraction
-        // of the distance travelled from the start.
+        // Both minimise the same energy from the same start: the same result to 2 % of the
+        // remaining distortion (energy − 1), with fewer analyses.
         let (ek, ef, e0) = (*hk.energy.last().unwrap(), *hf.energy.last().unwrap(), hk.energy[0]);
         eprintln!("kept {ek} ({} analyses) vs re-meshed {ef} ({} analyses), start {e0}", hk.analyses, hf.analyses);
-        assert!((ek - ef).abs() < 0.02 * (e0 - ef), "kept {ek} vs re-meshed {ef} from {e0}");
+        assert!((ek - ef).abs() < 0.02 * (ef - 1.0), "kept {ek} vs re-meshed {ef} from {e0}");
+        assert!(hk.analyses < hf.analyses);
     }
 }
