@@ -143,7 +143,7 @@ OPTIONS: dict[str, OptionInfo] = {
     "scaffold_iterations": _iterations(
         "Maximum iterations (each one a scaffold rebuild, a reweighted solve and a flip-free "
         "line search)", 100, 1000),
-    "scaffold_tolerance_exponent": _tolerance(_ENERGY_CHANGE, -6),
+    "scaffold_tolerance_exponent": _tolerance(_ENERGY_CHANGE, -4),
 }
 
 

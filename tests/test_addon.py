@@ -676,6 +676,7 @@ def test_arap_reports_its_flips_honestly(ext, scene, mesh):
 
 # uvflat method, the Blender method of its family, the metric the method minimises.
 ANCHORS = [("slim", "MINIMUM_STRETCH", "symmetric_dirichlet"),
+           ("scaffold", "MINIMUM_STRETCH", "symmetric_dirichlet"),
            ("abf", "ANGLE_BASED", "conformal"),
            ("lscm", "CONFORMAL", "conformal")]
 

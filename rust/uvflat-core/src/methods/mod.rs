@@ -78,7 +78,8 @@ pub enum Method {
     /// start with a flip-free line search, free boundary; never flips.
     Mips(mips::MipsOptions),
     /// Jiang, Schaefer & Panozzo 2017 (SCAF): symmetric Dirichlet on the chart plus a
-    /// re-triangulated scaffold of the free space; no flips and no boundary self-overlap.
+    /// scaffold triangulation of the free space, re-meshed as the chart moves; no flips and
+    /// no boundary self-overlap.
     Scaffold(scaffold::ScaffoldOptions),
 }
 
