@@ -63,7 +63,13 @@ fn parse_and_name() {
     let m = Method::parse("abf", &opts).unwrap();
     assert_eq!(
         m,
-        Method::Abf(AbfOptions { solver: AbfSolver::Plain, max_iterations: 12, tolerance: 1e-10, boundary: AbfBoundary::Convex })
+        Method::Abf(AbfOptions {
+            solver: AbfSolver::Plain,
+            max_iterations: 12,
+            tolerance: 1e-10,
+            boundary: AbfBoundary::Convex,
+            ..Default::default()
+        })
     );
     for bad in [
         ("solver", OptionValue::Str("lu".into())),
@@ -187,7 +193,7 @@ fn convex_boundary_is_bijective_on_every_disk_mesh() {
         let s = load(&dir.join(f));
         let opts = AbfOptions { boundary: AbfBoundary::Convex, ..Default::default() };
         let t = std::time::Instant::now();
-        let r = unwrap(&s.input(), &UnwrapOptions { method: Method::Abf(opts), ..Default::default() }).unwrap();
+        let r = unwrap(&s.input(), &UnwrapOptions { method: Method::Abf(opts.clone()), ..Default::default() }).unwrap();
         let secs = t.elapsed().as_secs_f64();
         assert_eq!(r.charts.len(), 1, "{f}");
         let c = &r.charts[0];
@@ -253,8 +259,8 @@ fn plain_abf_and_abf_plus_plus_reach_the_same_angles() {
         for chart in charts_of(s, &[]) {
             for boundary in [AbfBoundary::Free, AbfBoundary::Convex] {
                 let o = AbfOptions { tolerance: 1e-12, boundary, ..Default::default() };
-                let pp = abf::solve_angles(&chart, &AbfOptions { solver: AbfSolver::AbfPlusPlus, ..o }).unwrap();
-                let plain = abf::solve_angles(&chart, &AbfOptions { solver: AbfSolver::Plain, ..o }).unwrap();
+                let pp = abf::solve_angles(&chart, &AbfOptions { solver: AbfSolver::AbfPlusPlus, ..o.clone() }).unwrap();
+                let plain = abf::solve_angles(&chart, &AbfOptions { solver: AbfSolver::Plain, ..o.clone() }).unwrap();
                 assert!(pp.converged && plain.converged, "{name}");
                 assert!(pp.iterations > 0, "{name}: not a trivial case");
                 let diff = pp.alpha.iter().flatten().zip(plain.alpha.iter().flatten()).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
@@ -342,5 +348,73 @@ fn prescribed_boundary_sums_make_a_rectangle() {
         let ang = if ang < 0.0 { ang + std::f64::consts::TAU } else { ang };
         let want = if corners.contains(&outer[i]) { std::f64::consts::FRAC_PI_2 } else { std::f64::consts::PI };
         assert!((ang - want).abs() < 1e-6, "boundary vertex {i}: angle {ang} vs {want}");
+    }
+}
+
+/// `angle_sums` through the option parser and `unwrap`: mesh vertices, typed errors naming the
+/// entry and vertex, refused by other methods; on a planar disk, π/2 at four boundary vertices
+/// and π at the others make the UV outline a rectangle.
+#[test]
+fn angle_sums_option_through_parse_and_unwrap() {
+    use std::f64::consts::FRAC_PI_2;
+    use uvflat_core::UvError;
+    let s = planar_disk(7, 6);
+    let chart = &charts_of(&s, &[])[0];
+    let outer = chart.boundary_loops[chart.outer_loop().unwrap()].clone();
+    let m = outer.len();
+    let corner_idx: Vec<usize> = (0..4).map(|k| k * m / 4).collect();
+    // Mesh vertex of each outer chart vertex (no seams: one chart vertex per mesh vertex).
+    let sums: Vec<(u32, f64)> = outer
+        .iter()
+        .enumerate()
+        .map(|(i, &v)| (chart.mesh_vertex[v as usize], if corner_idx.contains(&i) { FRAC_PI_2 } else { PI }))
+        .collect();
+    let opt = |v: Vec<(u32, f64)>| vec![("angle_sums".to_string(), OptionValue::VertexValues(v))];
+    let method = Method::parse("abf", &opt(sums.clone())).unwrap();
+    let Method::Abf(ref o) = method else { panic!("abf") };
+    assert_eq!(o.angle_sums, sums);
+    let r = unwrap(&s.input(), &UnwrapOptions { method, ..Default::default() }).unwrap();
+    let c = &r.charts[0];
+    assert_eq!(c.status, ChartStatus::Solved, "{:?}", c.reason);
+    assert_eq!(c.flips, 0);
+    // UV of every mesh vertex (one chart vertex each), from the per-corner UVs.
+    let mut uv = vec![[0.0; 2]; s.positions.len()];
+    for (c, &v) in s.corner_verts.iter().enumerate() {
+        uv[v as usize] = r.uv[c];
+    }
+    let mv: Vec<usize> = outer.iter().map(|&v| chart.mesh_vertex[v as usize] as usize).collect();
+    for i in 0..m {
+        let (p, q, n) = (uv[mv[(i + m - 1) % m]], uv[mv[i]], uv[mv[(i + 1) % m]]);
+        let (a1, a2) = ([p[0] - q[0], p[1] - q[1]], [n[0] - q[0], n[1] - q[1]]);
+        let ang = (a2[0] * a1[1] - a2[1] * a1[0]).atan2(a1[0] * a2[0] + a1[1] * a2[1]);
+        let ang = if ang < 0.0 { ang + std::f64::consts::TAU } else { ang };
+        let want = if corner_idx.contains(&i) { FRAC_PI_2 } else { PI };
+        assert!((ang - want).abs() < 1e-6, "outer vertex {i}: UV angle {ang}, prescribed {want}");
+    }
+    // Errors.
+    assert!(matches!(Method::parse("lscm", &opt(vec![(0, PI)])), Err(UvError::Option { .. })));
+    assert!(matches!(
+        Method::parse("abf", &[("angle_sums".to_string(), OptionValue::Float(1.0))]),
+        Err(UvError::Option { name: "angle_sums", .. })
+    ));
+    for (bad, entry, vertex) in [
+        (vec![(3, PI), (5, f64::NAN)], 1, 5),
+        (vec![(4, 0.0)], 0, 4),
+        (vec![(4, -1.0)], 0, 4),
+        (vec![(2, 1.0), (2, 2.0)], 1, 2),
+    ] {
+        match Method::parse("abf", &opt(bad.clone())) {
+            Err(UvError::AngleSum { entry: e, vertex: v, .. }) => assert_eq!((e, v), (entry, vertex), "{bad:?}"),
+            other => panic!("{bad:?}: {other:?}"),
+        }
+    }
+    let n = s.positions.len() as u32;
+    let interior = (0..s.positions.len()).find(|&v| !outer.iter().any(|&o| chart.mesh_vertex[o as usize] as usize == v)).unwrap() as u32;
+    for (bad, vertex) in [(vec![(n, PI)], n), (vec![(interior, 1000.0)], interior)] {
+        let method = Method::parse("abf", &opt(bad.clone())).unwrap();
+        match unwrap(&s.input(), &UnwrapOptions { method, ..Default::default() }) {
+            Err(UvError::AngleSum { vertex: v, .. }) => assert_eq!(v, vertex as u64),
+            other => panic!("{bad:?}: {:?}", other.map(|_| ())),
+        }
     }
 }

@@ -184,7 +184,7 @@ impl AbfBoundary {
 }
 
 /// Options of [`solve`] and [`solve_angles`].
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct AbfOptions {
     /// Linear algebra of the Newton step. Default [`AbfSolver::AbfPlusPlus`].
     pub solver: AbfSolver,
@@ -194,11 +194,21 @@ pub struct AbfOptions {
     pub tolerance: f64,
     /// Boundary constraint. Default [`AbfBoundary::Free`].
     pub boundary: AbfBoundary,
+    /// Prescribed angle sums `(mesh vertex, sum in radians)`, used by [`solve`] (see
+    /// [`solve_with_sums`]): every chart vertex of a listed mesh vertex gets the sum, so a mesh
+    /// vertex split by a seam has it on each side. Default empty.
+    pub angle_sums: Vec<(u32, f64)>,
 }
 
 impl Default for AbfOptions {
     fn default() -> Self {
-        AbfOptions { solver: AbfSolver::AbfPlusPlus, max_iterations: 30, tolerance: 1e-9, boundary: AbfBoundary::Free }
+        AbfOptions {
+            solver: AbfSolver::AbfPlusPlus,
+            max_iterations: 30,
+            tolerance: 1e-9,
+            boundary: AbfBoundary::Free,
+            angle_sums: Vec::new(),
+        }
     }
 }
 
@@ -1215,13 +1225,61 @@ fn solve_filled(chart: &Chart, options: &AbfOptions, prescribed: &[(u32, f64)]) 
 }
 
 /// ABF / ABF++ of one chart: solve the angles, then reconstruct UVs with LSCM driven by them
-/// (pins as in [`lscm::solve_with_angles`]).
+/// (pins as in [`lscm::solve_with_angles`]). [`AbfOptions::angle_sums`] (mesh vertices) are
+/// applied to every chart vertex of a listed mesh vertex (see [`solve_with_sums`]).
 ///
 /// When the angle solve fails (no convergence, a linear system that cannot be factored, or
 /// angles outside (0, π)), the chart is mapped by plain LSCM with its 3D angles and the
 /// solution carries a [`Fallback`] saying why. Failures: those of the LSCM solve.
 pub fn solve(chart: &Chart, pins: &[(u32, [f64; 2])], options: &AbfOptions) -> Result<ChartSolution, ChartFailure> {
-    solve_with_sums(chart, pins, options, &[])
+    if options.angle_sums.is_empty() {
+        return solve_with_sums(chart, pins, options, &[]);
+    }
+    let by_mesh_vertex: std::collections::HashMap<u32, f64> = options.angle_sums.iter().copied().collect();
+    let prescribed: Vec<(u32, f64)> = chart
+        .mesh_vertex
+        .iter()
+        .enumerate()
+        .filter_map(|(cv, mv)| by_mesh_vertex.get(mv).map(|&t| (cv as u32, t)))
+        .collect();
+    solve_with_sums(chart, pins, options, &prescribed)
+}
+
+/// Check prescribed angle sums `(mesh vertex, sum)` against a mesh whose vertex `v` has
+/// `corners[v]` face corners: the vertex exists and is used by a face, is listed once, and the
+/// sum is finite with `0 < sum < 2π · corners[v]` (every polygon corner angle is below 2π).
+/// Without a mesh (`corners` empty) only the sum's finiteness and sign and duplicates are
+/// checked.
+///
+/// Errors: [`UvError::AngleSum`] naming the entry and the vertex.
+pub fn validate_angle_sums(sums: &[(u32, f64)], corners: &[u32]) -> crate::error::Result<()> {
+    use crate::error::UvError;
+    let bad = |entry: usize, vertex: u32, value: f64, reason: String| UvError::AngleSum { entry, vertex: vertex as u64, value, reason };
+    let mut seen = std::collections::HashMap::new();
+    for (i, &(v, t)) in sums.iter().enumerate() {
+        if let Some(first) = seen.insert(v, i) {
+            return Err(bad(i, v, t, format!("vertex given twice (entries {first} and {i})")));
+        }
+        if !t.is_finite() {
+            return Err(bad(i, v, t, "the sum is not finite".into()));
+        }
+        if t <= 0.0 {
+            return Err(bad(i, v, t, "the sum must be positive (radians)".into()));
+        }
+        if !corners.is_empty() {
+            let Some(&k) = corners.get(v as usize) else {
+                return Err(bad(i, v, t, format!("vertex index out of range (mesh has {} vertices)", corners.len())));
+            };
+            if k == 0 {
+                return Err(bad(i, v, t, "the vertex is not used by any face".into()));
+            }
+            let most = 2.0 * PI * k as f64;
+            if t >= most {
+                return Err(bad(i, v, t, format!("the sum must be below 2π × {k} corners = {most:.6} radians")));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// [`solve`] with prescribed angle sums (see [`solve_angles_with_sums`]).
