@@ -454,8 +454,6 @@ struct FaceEval {
     row_terms: [f64; MAX_FACE_ROWS],
     /// Largest scaled Lagrangian gradient of the triangle's corners.
     stationarity: f64,
-    /// Largest product of a corner's lower-bound multiplier and gap (0 without bounds).
-    bound_compl: f64,
 }
 
 /// Residuals and Newton ingredients at the current state.
@@ -534,7 +532,6 @@ fn evaluate(p: &Problem<'_>, s: &State) -> Eval {
                 hess[k] += z / gap;
                 fallback_hess[k] += z / gap;
                 grad[k] -= s.mu / gap;
-                fe.bound_compl = fe.bound_compl.max(z * gap);
             }
         } else {
             for k in 0..3 {
@@ -563,7 +560,12 @@ fn evaluate(p: &Problem<'_>, s: &State) -> Eval {
             c_row[row.0 as usize] += term;
         }
     }
-    let mut complementarity: f64 = if p.lower > 0.0 { faces.iter().fold(0.0f64, |m, fe| m.max(fe.bound_compl)) } else { 0.0 };
+    let mut complementarity: f64 = 0.0;
+    if p.lower > 0.0 {
+        for (a, z) in s.alpha.iter().zip(&s.z_lo) {
+            complementarity = complementarity.max(z * (a - p.lower));
+        }
+    }
     let (mut c_newton, mut diag) = (Vec::new(), Vec::new());
     if p.has_ineq {
         c_newton = c_row.clone();
