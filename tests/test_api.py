@@ -101,6 +101,7 @@ def test_methods_and_exports():
         ("SeamError", ("MeshError",)),
         ("PinError", ("UvflatError", "ValueError")),
         ("OptionError", ("UvflatError", "ValueError")),
+        ("AngleSumError", ("OptionError", "UvflatError", "ValueError")),
         ("UvflatError", ("Exception",)),
     ],
 )
@@ -766,3 +767,187 @@ def test_factorization_seconds_is_defined_for_the_linear_methods_only():
     assert uvflat.factorization_seconds(positions, corner_verts, face_sizes, selected=none) == 0.0
     with pytest.raises(uvflat.SeamError):
         uvflat.factorization_seconds(positions, corner_verts, face_sizes, seams=[[0, 10**6]])
+
+
+# ---------------------------------------------------------------------------------------------
+# ABF prescribed angle sums
+
+
+def polar_disk(rings: int, n: int):
+    """Planar disk of radius 1: a centre vertex and `rings` rings of `n` vertices each (ring r
+    turned by half a step against ring r-1), triangulated counter-clockwise. The outer ring is
+    vertices (rings-1)*n+1 ... rings*n."""
+    pos = [[0.0, 0.0, 0.0]]
+    for r in range(1, rings + 1):
+        for k in range(n):
+            t = 2 * math.pi * (k + 0.5 * (r % 2)) / n
+            pos.append([r / rings * math.cos(t), r / rings * math.sin(t), 0.0])
+
+    def vid(r, k):
+        return 0 if r == 0 else 1 + (r - 1) * n + k % n
+
+    faces = [[0, vid(1, k), vid(1, k + 1)] for k in range(n)]
+    for r in range(1, rings):
+        for k in range(n):
+            if r % 2:  # ring r is turned by +half a step: ring r+1 vertex k sits below it
+                faces += [[vid(r, k), vid(r + 1, k + 1), vid(r, k + 1)], [vid(r, k), vid(r + 1, k), vid(r + 1, k + 1)]]
+            else:
+                faces += [[vid(r, k), vid(r + 1, k), vid(r, k + 1)], [vid(r, k + 1), vid(r + 1, k), vid(r + 1, k + 1)]]
+    cv = np.array([v for f in faces for v in f], dtype=np.int64)
+    return np.array(pos), cv, np.full(len(faces), 3, dtype=np.int64)
+
+
+def vertex_uv(cv, uv):
+    """UV of every vertex (meshes without seams: all corners of a vertex agree)."""
+    out = np.zeros((cv.max() + 1, 2))
+    out[cv] = uv
+    return out
+
+
+def uv_angle_sums(cv, fs, uv):
+    """Angle sum of the UV map at every vertex, over the corners of triangle faces."""
+    sums = np.zeros(cv.max() + 1)
+    tri = cv.reshape(-1, 3)
+    q = uv.reshape(-1, 3, 2)
+    for k in range(3):
+        a, b = q[:, (k + 1) % 3] - q[:, k], q[:, (k + 2) % 3] - q[:, k]
+        ang = np.abs(np.arctan2(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0], (a * b).sum(axis=1)))
+        np.add.at(sums, tri[:, k], ang)
+    return sums
+
+
+def test_abf_angle_sums_make_a_rectangle():
+    rings, n = 5, 24
+    pos, cv, fs = polar_disk(rings, n)
+    outer = np.arange((rings - 1) * n + 1, rings * n + 1)
+    corners = outer[:: n // 4]
+    sums = np.where(np.isin(outer, corners), math.pi / 2, math.pi)
+    r = uvflat.unwrap(pos, cv, fs, method="abf", angle_sums=(outer, sums))
+    (rep,) = r.charts
+    assert rep.status == "solved", rep.reason
+    assert rep.flips == 0 and not rep.overlap
+    # Without the option the outline is round: the option is what makes it a rectangle.
+    free = uvflat.unwrap(pos, cv, fs, method="abf")
+    assert abs(uv_angle_sums(cv, fs, free.uv)[outer[1]] - math.pi) > 0.05
+    got = uv_angle_sums(cv, fs, r.uv)
+    assert np.allclose(got[outer], sums, atol=1e-6)
+    # Rotated so that the first side is horizontal, every boundary edge is axis-aligned.
+    p = vertex_uv(cv, r.uv)[outer]
+    d = p[1] - p[0]
+    c, s = d / np.hypot(*d)
+    q = p @ np.array([[c, -s], [s, c]])
+    e = np.roll(q, -1, axis=0) - q
+    assert np.all(np.minimum(np.abs(e[:, 0]), np.abs(e[:, 1])) < 1e-6 * np.hypot(e[:, 0], e[:, 1]))
+
+
+def test_abf_angle_sum_at_an_interior_vertex_makes_a_cone():
+    pos, cv, fs = grid(8, 8, triangles=True)
+    v = 4 * 9 + 4  # the centre vertex (4, 4)
+    seams = np.array([[4 * 9 + i, 4 * 9 + i + 1] for i in range(4, 8)])  # a slit to the border
+    r = uvflat.unwrap(pos, cv, fs, method="abf", seams=seams, angle_sums=([v], [math.pi]))
+    (rep,) = r.charts
+    assert rep.status == "solved", rep.reason
+    assert rep.flips == 0
+    assert abs(uv_angle_sums(cv, fs, r.uv)[v] - math.pi) < 1e-6
+    # The same slit without the option: the flat angle 2*pi.
+    flat = uvflat.unwrap(pos, cv, fs, method="abf", seams=seams)
+    assert abs(uv_angle_sums(cv, fs, flat.uv)[v] - 2 * math.pi) < 1e-6
+
+
+def test_abf_angle_sum_errors():
+    pos, cv, fs = grid(3, 3)  # quads: an interior vertex has 4 corners
+    cases = [
+        (([1000], [1.0]), 0, 1000),
+        (([2, -1], [1.0, 1.0]), 1, -1),
+        (([5, 6], [1.0, float("nan")]), 1, 6),
+        (([5], [0.0]), 0, 5),
+        (([5], [-2.0]), 0, 5),
+        (([5], [8 * math.pi + 0.1]), 0, 5),
+        (([5, 5], [1.0, 2.0]), 1, 5),
+    ]
+    for sums, entry, vertex in cases:
+        with pytest.raises(uvflat.AngleSumError) as ei:
+            uvflat.unwrap(pos, cv, fs, method="abf", angle_sums=sums)
+        assert isinstance(ei.value, uvflat.OptionError)
+        assert ei.value.option == "angle_sums"
+        assert (ei.value.entry, ei.value.vertex) == (entry, vertex), (sums, str(ei.value))
+        assert str(vertex) in str(ei.value)
+    # A sum just below the bound is accepted (it may not be reachable: then ABF falls back).
+    uvflat.unwrap(pos, cv, fs, method="abf", angle_sums=([5], [8 * math.pi - 0.1]))
+    with pytest.raises(uvflat.OptionError) as ei:
+        uvflat.unwrap(pos, cv, fs, method="lscm", angle_sums=([5], [1.0]))
+    assert not isinstance(ei.value, uvflat.AngleSumError)
+    with pytest.raises(uvflat.OptionError):
+        uvflat.unwrap(pos, cv, fs, method="abf", angle_sums=([5], [1.0], [2.0]))
+    with pytest.raises(uvflat.InputError):
+        uvflat.unwrap(pos, cv, fs, method="abf", angle_sums=([1, 2], [1.0]))
+
+
+def _outer_loop_is_convex(cv, fs, uv, faces):
+    """Whether the outer boundary loop of the UV chart made of `faces` is convex: every chart
+    UV lies left of (or on) every edge of the loop of largest signed area."""
+    starts = np.concatenate([[0], np.cumsum(fs)[:-1]])
+    key = lambda c: (int(cv[c]), round(float(uv[c, 0]), 9), round(float(uv[c, 1]), 9))
+    edges = {}
+    for f in faces:
+        cs = list(range(starts[f], starts[f] + fs[f]))
+        for i, c in enumerate(cs):
+            edges[key(c)] = edges.get(key(c), []) + [key(cs[(i + 1) % len(cs)])]
+    directed = {(a, b) for a, bs in edges.items() for b in bs}
+    nxt = {a: b for (a, b) in directed if (b, a) not in directed}
+    loops, seen = [], set()
+    for a in nxt:
+        if a in seen:
+            continue
+        loop = [a]
+        seen.add(a)
+        while nxt[loop[-1]] != a:
+            loop.append(nxt[loop[-1]])
+            seen.add(loop[-1])
+        loops.append(np.array([[p[1], p[2]] for p in loop]))
+    area = lambda q: 0.5 * np.sum(q[:, 0] * np.roll(q[:, 1], -1) - np.roll(q[:, 0], -1) * q[:, 1])
+    outer = max(loops, key=area)
+    pts = np.array([[p[1], p[2]] for p in edges])
+    scale = np.ptp(pts, axis=0).max()
+    for a, b in zip(outer, np.roll(outer, -1, axis=0)):
+        d = b - a
+        side = d[0] * (pts[:, 1] - a[1]) - d[1] * (pts[:, 0] - a[0])
+        if side.min() < -1e-9 * scale * scale:
+            return False
+    return True
+
+
+def test_abf_convex_boundary_on_suzanne_with_her_seams():
+    """Suzanne (Blender's primitive) cut along the seams of her own UV islands: with
+    boundary="convex" every chart is solved by ABF, has no flipped triangle and no boundary
+    self-overlap, and its outer UV outline is convex (with a free boundary it is not)."""
+    pytest.importorskip("bpy")
+    import importlib.util
+    from pathlib import Path
+
+    spec = importlib.util.spec_from_file_location("bs_common", Path(__file__).parent.parent / "blender_scripts" / "common.py")
+    common = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(common)
+    import bpy
+
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    me = common.suzanne().data
+    pos = np.array([v.co[:] for v in me.vertices])
+    cv = np.array([l.vertex_index for l in me.loops])
+    fs = np.array([p.loop_total for p in me.polygons])
+    seams = np.array([e.vertices[:] for e in me.edges if e.use_seam])
+    assert len(seams) > 0
+    convex_somewhere = False
+    for boundary in ("free", "convex"):
+        r = uvflat.unwrap(pos, cv, fs, method="abf", seams=seams, boundary=boundary)
+        assert len(r.charts) >= 2
+        for rep in r.charts:
+            faces = np.flatnonzero(r.chart == rep.id)
+            convex = _outer_loop_is_convex(cv, fs, r.uv, faces)
+            if boundary == "convex":
+                assert rep.status == "solved", rep.reason
+                assert rep.flips == 0 and not rep.overlap, rep.as_dict()
+                assert convex, rep.id
+            else:
+                convex_somewhere |= not convex
+    assert convex_somewhere, "the free boundary should leave some outline non-convex"

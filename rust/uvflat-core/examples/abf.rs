@@ -59,7 +59,7 @@ fn main() {
     for _ in 0..if levels > 0 { 1 } else { 3 } {
         let t = Instant::now();
         let cpu0 = cpu_seconds();
-        let r = unwrap(&s.input(), &UnwrapOptions { method: Method::Abf(opts), ..Default::default() }).unwrap();
+        let r = unwrap(&s.input(), &UnwrapOptions { method: Method::Abf(opts.clone()), ..Default::default() }).unwrap();
         let dt = t.elapsed().as_secs_f64();
         let dcpu = cpu_seconds() - cpu0;
         let flips: usize = r.charts.iter().map(|c| c.flips).sum();

@@ -39,6 +39,9 @@ pub enum UvError {
     /// An option has a value outside its domain.
     #[error("option {name}: {reason}")]
     Option { name: &'static str, reason: String },
+    /// A prescribed angle sum (ABF option `angle_sums`) names a bad vertex or has a bad value.
+    #[error("option angle_sums, entry {entry} (vertex {vertex}, sum {value}): {reason}")]
+    AngleSum { entry: usize, vertex: u64, value: f64, reason: String },
 }
 
 /// Result alias used throughout the crate.

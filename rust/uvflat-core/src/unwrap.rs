@@ -192,6 +192,15 @@ pub fn unwrap(input: &MeshInput<'_>, options: &UnwrapOptions) -> Result<Unwrappe
         }
     }
     options.method.validate()?;
+    if let crate::methods::Method::Abf(o) = &options.method {
+        if !o.angle_sums.is_empty() {
+            let mut corners = vec![0u32; input.positions.len()];
+            for &v in input.corner_verts {
+                corners[v as usize] += 1;
+            }
+            crate::methods::abf::validate_angle_sums(&o.angle_sums, &corners)?;
+        }
+    }
     // Charts run in parallel; inside one chart the sparse factorizations of the sizes met in
     // practice are faster sequential than split across threads.
     faer::set_global_parallelism(faer::Par::Seq);

@@ -63,7 +63,13 @@ fn parse_and_name() {
     let m = Method::parse("abf", &opts).unwrap();
     assert_eq!(
         m,
-        Method::Abf(AbfOptions { solver: AbfSolver::Plain, max_iterations: 12, tolerance: 1e-10, boundary: AbfBoundary::Convex })
+        Method::Abf(AbfOptions {
+            solver: AbfSolver::Plain,
+            max_iterations: 12,
+            tolerance: 1e-10,
+            boundary: AbfBoundary::Convex,
+            ..Default::default()
+        })
     );
     for bad in [
         ("solver", OptionValue::Str("lu".into())),
@@ -151,55 +157,85 @@ fn developable_surfaces_keep_their_angles_and_flatten_isometrically() {
     }
 }
 
+/// Angle sum at every chart vertex, computed here from the angles.
+fn vertex_sums(chart: &Chart, alpha: &[[f64; 3]]) -> Vec<f64> {
+    let mut sum = vec![0.0; chart.positions.len()];
+    for (t, al) in chart.triangles.iter().zip(alpha) {
+        for k in 0..3 {
+            sum[t[k] as usize] += al[k];
+        }
+    }
+    sum
+}
+
 #[test]
-fn no_flips_on_the_disk_meshes_free_and_convex() {
+fn no_flips_on_the_disk_meshes_free() {
     let Some(dir) = shared_meshes() else { return };
     for f in ["camelhead.off", "lion.off", "alligator.obj"] {
         let s = load(&dir.join(f));
-        for boundary in [AbfBoundary::Free, AbfBoundary::Convex] {
-            let t = std::time::Instant::now();
-            let r = unwrap(&s.input(), &UnwrapOptions { method: abf_method(boundary), ..Default::default() }).unwrap();
-            let secs = t.elapsed().as_secs_f64();
-            assert_eq!(r.charts.len(), 1, "{f}");
-            let c = &r.charts[0];
-            eprintln!(
-                "{f:>16} {:>6}: unwrap {secs:.3} s, {} iterations, flips {}, overlap {}, conformal {:.4}",
-                boundary.name(),
-                c.iterations,
-                c.flips,
-                c.overlap,
-                c.distortion.conformal
-            );
-            if f == "alligator.obj" && boundary == AbfBoundary::Convex {
-                // Known gap: straightening alligator's deep boundary bays drives an angle to
-                // zero in the active-set iteration (no merit-function globalisation yet); the
-                // chart must then fall back to LSCM, saying so, and still not flip.
-                if c.status == ChartStatus::Fallback {
-                    assert!(c.reason.as_deref().unwrap().starts_with("abf did not converge"), "{:?}", c.reason);
-                    assert_eq!(c.flips, 0);
-                    continue;
-                }
+        let r = unwrap(&s.input(), &UnwrapOptions { method: abf_method(AbfBoundary::Free), ..Default::default() }).unwrap();
+        assert_eq!(r.charts.len(), 1, "{f}");
+        let c = &r.charts[0];
+        assert_eq!(c.status, ChartStatus::Solved, "{f}: {:?}", c.reason);
+        assert_eq!(c.flips, 0, "{f}");
+    }
+}
+
+/// Convex boundary on every disk and disk-with-holes mesh: the angle solve converges to 1e-9,
+/// the angles satisfy the ABF constraints of the hole-filled disk and lie in (0, π), every
+/// outer-loop vertex has angle sum ≤ π (in fact ≤ the cap π − π/n), every hole closes (its
+/// turning is −2π: Σ over its vertices of (π − sum) = −2π), and the UV map has no flipped
+/// triangle and no boundary self-overlap.
+#[test]
+fn convex_boundary_is_bijective_on_every_disk_mesh() {
+    let Some(dir) = shared_meshes() else { return };
+    for f in ["camelhead.off", "lion.off", "alligator.obj", "beetle.off", "halftunnel.off"] {
+        let s = load(&dir.join(f));
+        let opts = AbfOptions { boundary: AbfBoundary::Convex, ..Default::default() };
+        let t = std::time::Instant::now();
+        let r = unwrap(&s.input(), &UnwrapOptions { method: Method::Abf(opts.clone()), ..Default::default() }).unwrap();
+        let secs = t.elapsed().as_secs_f64();
+        assert_eq!(r.charts.len(), 1, "{f}");
+        let c = &r.charts[0];
+        eprintln!("{f:>16} convex: unwrap {secs:.3} s, {} iterations, flips {}, overlap {}, conformal {:.4}", c.iterations, c.flips, c.overlap, c.distortion.conformal);
+        assert_eq!(c.status, ChartStatus::Solved, "{f}: {:?}", c.reason);
+        assert_eq!(c.flips, 0, "{f}");
+        assert!(!c.overlap, "{f}");
+        assert!(c.residual < 1e-9, "{f}: residual {}", c.residual);
+
+        let chart = &charts_of(&s, &[])[0];
+        let a = abf::solve_angles(chart, &opts).unwrap();
+        assert!(a.converged && a.residual < 1e-9, "{f}: residual {}", a.residual);
+        assert!(a.alpha.iter().flatten().all(|&x| x > 0.0 && x < PI), "{f}");
+        for t in &a.alpha {
+            assert!((t[0] + t[1] + t[2] - PI).abs() < 1e-9, "{f}: triangle sum");
+        }
+        let sum = vertex_sums(chart, &a.alpha);
+        let outer_i = chart.outer_loop().unwrap();
+        let outer = &chart.boundary_loops[outer_i];
+        let cap = abf::convex_cap(outer.len());
+        for &v in outer {
+            assert!(sum[v as usize] <= PI + 1e-9, "{f}: outer vertex {v} angle sum {}", sum[v as usize]);
+            assert!(sum[v as usize] <= cap + 1e-9, "{f}: outer vertex {v} above the cap");
+        }
+        // Outer turning 2π (a closed convex outline), every hole's turning −2π.
+        let turning = |lp: &Vec<u32>| lp.iter().map(|&v| PI - sum[v as usize]).sum::<f64>();
+        assert!((turning(outer) - 2.0 * PI).abs() < 1e-8, "{f}: outer turning {}", turning(outer));
+        for (l, lp) in chart.boundary_loops.iter().enumerate() {
+            if l != outer_i {
+                assert!((turning(lp) + 2.0 * PI).abs() < 1e-8, "{f}: hole {l} turning {}", turning(lp));
             }
-            assert_eq!(c.status, ChartStatus::Solved, "{f}: {:?}", c.reason);
-            assert_eq!(c.flips, 0, "{f} {boundary:?}");
-            if boundary == AbfBoundary::Convex {
-                assert!(!c.overlap, "{f}");
-                // The solved angles: every outer-boundary vertex has angle sum ≤ π.
-                let chart = &charts_of(&s, &[])[0];
-                let a = abf::solve_angles(chart, &AbfOptions { boundary, ..Default::default() }).unwrap();
-                assert!(a.converged);
-                assert!(constraint_violation(chart, &a.alpha) < 1e-9);
-                let mut sum = vec![0.0; chart.positions.len()];
-                for (t, al) in chart.triangles.iter().zip(&a.alpha) {
-                    for k in 0..3 {
-                        sum[t[k] as usize] += al[k];
-                    }
-                }
-                let outer = &chart.boundary_loops[chart.outer_loop().unwrap()];
-                for &v in outer {
-                    assert!(sum[v as usize] <= PI + 1e-9, "{f}: boundary vertex {v} angle sum {}", sum[v as usize]);
-                }
-            }
+        }
+        // Interior vertices of the chart: planarity and wheel hold (holes filled or not).
+        assert!(constraint_violation(chart, &a.alpha) < 1e-9, "{f}");
+        // The outline in the UV map turns left at every outer vertex: strictly convex.
+        let sol = abf::solve(chart, &[], &opts).unwrap();
+        assert!(sol.fallback.is_none(), "{f}");
+        let m = outer.len();
+        for i in 0..m {
+            let (p, q, n) = (sol.uv[outer[(i + m - 1) % m] as usize], sol.uv[outer[i] as usize], sol.uv[outer[(i + 1) % m] as usize]);
+            let cross = (q[0] - p[0]) * (n[1] - q[1]) - (q[1] - p[1]) * (n[0] - q[0]);
+            assert!(cross > 0.0, "{f}: outline turns right at outer vertex {}", outer[i]);
         }
     }
 }
@@ -223,8 +259,8 @@ fn plain_abf_and_abf_plus_plus_reach_the_same_angles() {
         for chart in charts_of(s, &[]) {
             for boundary in [AbfBoundary::Free, AbfBoundary::Convex] {
                 let o = AbfOptions { tolerance: 1e-12, boundary, ..Default::default() };
-                let pp = abf::solve_angles(&chart, &AbfOptions { solver: AbfSolver::AbfPlusPlus, ..o }).unwrap();
-                let plain = abf::solve_angles(&chart, &AbfOptions { solver: AbfSolver::Plain, ..o }).unwrap();
+                let pp = abf::solve_angles(&chart, &AbfOptions { solver: AbfSolver::AbfPlusPlus, ..o.clone() }).unwrap();
+                let plain = abf::solve_angles(&chart, &AbfOptions { solver: AbfSolver::Plain, ..o.clone() }).unwrap();
                 assert!(pp.converged && plain.converged, "{name}");
                 assert!(pp.iterations > 0, "{name}: not a trivial case");
                 let diff = pp.alpha.iter().flatten().zip(plain.alpha.iter().flatten()).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
@@ -312,5 +348,73 @@ fn prescribed_boundary_sums_make_a_rectangle() {
         let ang = if ang < 0.0 { ang + std::f64::consts::TAU } else { ang };
         let want = if corners.contains(&outer[i]) { std::f64::consts::FRAC_PI_2 } else { std::f64::consts::PI };
         assert!((ang - want).abs() < 1e-6, "boundary vertex {i}: angle {ang} vs {want}");
+    }
+}
+
+/// `angle_sums` through the option parser and `unwrap`: mesh vertices, typed errors naming the
+/// entry and vertex, refused by other methods; on a planar disk, π/2 at four boundary vertices
+/// and π at the others make the UV outline a rectangle.
+#[test]
+fn angle_sums_option_through_parse_and_unwrap() {
+    use std::f64::consts::FRAC_PI_2;
+    use uvflat_core::UvError;
+    let s = planar_disk(7, 6);
+    let chart = &charts_of(&s, &[])[0];
+    let outer = chart.boundary_loops[chart.outer_loop().unwrap()].clone();
+    let m = outer.len();
+    let corner_idx: Vec<usize> = (0..4).map(|k| k * m / 4).collect();
+    // Mesh vertex of each outer chart vertex (no seams: one chart vertex per mesh vertex).
+    let sums: Vec<(u32, f64)> = outer
+        .iter()
+        .enumerate()
+        .map(|(i, &v)| (chart.mesh_vertex[v as usize], if corner_idx.contains(&i) { FRAC_PI_2 } else { PI }))
+        .collect();
+    let opt = |v: Vec<(u32, f64)>| vec![("angle_sums".to_string(), OptionValue::VertexValues(v))];
+    let method = Method::parse("abf", &opt(sums.clone())).unwrap();
+    let Method::Abf(ref o) = method else { panic!("abf") };
+    assert_eq!(o.angle_sums, sums);
+    let r = unwrap(&s.input(), &UnwrapOptions { method, ..Default::default() }).unwrap();
+    let c = &r.charts[0];
+    assert_eq!(c.status, ChartStatus::Solved, "{:?}", c.reason);
+    assert_eq!(c.flips, 0);
+    // UV of every mesh vertex (one chart vertex each), from the per-corner UVs.
+    let mut uv = vec![[0.0; 2]; s.positions.len()];
+    for (c, &v) in s.corner_verts.iter().enumerate() {
+        uv[v as usize] = r.uv[c];
+    }
+    let mv: Vec<usize> = outer.iter().map(|&v| chart.mesh_vertex[v as usize] as usize).collect();
+    for i in 0..m {
+        let (p, q, n) = (uv[mv[(i + m - 1) % m]], uv[mv[i]], uv[mv[(i + 1) % m]]);
+        let (a1, a2) = ([p[0] - q[0], p[1] - q[1]], [n[0] - q[0], n[1] - q[1]]);
+        let ang = (a2[0] * a1[1] - a2[1] * a1[0]).atan2(a1[0] * a2[0] + a1[1] * a2[1]);
+        let ang = if ang < 0.0 { ang + std::f64::consts::TAU } else { ang };
+        let want = if corner_idx.contains(&i) { FRAC_PI_2 } else { PI };
+        assert!((ang - want).abs() < 1e-6, "outer vertex {i}: UV angle {ang}, prescribed {want}");
+    }
+    // Errors.
+    assert!(matches!(Method::parse("lscm", &opt(vec![(0, PI)])), Err(UvError::Option { .. })));
+    assert!(matches!(
+        Method::parse("abf", &[("angle_sums".to_string(), OptionValue::Float(1.0))]),
+        Err(UvError::Option { name: "angle_sums", .. })
+    ));
+    for (bad, entry, vertex) in [
+        (vec![(3, PI), (5, f64::NAN)], 1, 5),
+        (vec![(4, 0.0)], 0, 4),
+        (vec![(4, -1.0)], 0, 4),
+        (vec![(2, 1.0), (2, 2.0)], 1, 2),
+    ] {
+        match Method::parse("abf", &opt(bad.clone())) {
+            Err(UvError::AngleSum { entry: e, vertex: v, .. }) => assert_eq!((e, v), (entry, vertex), "{bad:?}"),
+            other => panic!("{bad:?}: {other:?}"),
+        }
+    }
+    let n = s.positions.len() as u32;
+    let interior = (0..s.positions.len()).find(|&v| !outer.iter().any(|&o| chart.mesh_vertex[o as usize] as usize == v)).unwrap() as u32;
+    for (bad, vertex) in [(vec![(n, PI)], n), (vec![(interior, 1000.0)], interior)] {
+        let method = Method::parse("abf", &opt(bad.clone())).unwrap();
+        match unwrap(&s.input(), &UnwrapOptions { method, ..Default::default() }) {
+            Err(UvError::AngleSum { vertex: v, .. }) => assert_eq!(v, vertex as u64),
+            other => panic!("{bad:?}: {:?}", other.map(|_| ())),
+        }
     }
 }

@@ -25,6 +25,7 @@ pub enum Kind {
     Seam,
     Pin,
     Option,
+    AngleSum,
 }
 
 /// (kind, class name, parent kind (None: Exception), also a ValueError, attribute names, doc)
@@ -109,6 +110,18 @@ const SPECS: &[Spec] = &[
         &["option", "reason"],
         "Unknown method, unknown option, or an option value outside its domain.\n\n\
          Attributes: option (name of the option, or 'method'), reason.",
+    ),
+    (
+        Kind::AngleSum,
+        "AngleSumError",
+        Some(Kind::Option),
+        false,
+        &["entry", "vertex", "value"],
+        "A prescribed angle sum (abf's angle_sums) names a vertex that does not exist, is not \
+         used by a face or is listed twice, or its sum is not finite, not positive, or not \
+         below 2*pi times the vertex's number of face corners.\n\n\
+         Attributes: option ('angle_sums'), reason, entry (position in the arrays), vertex, \
+         value (the sum, None when the index itself could not be read).",
     ),
 ];
 
@@ -245,6 +258,12 @@ pub fn map_uv_error(py: Python<'_>, err: UvError, uv_argument: &str) -> PyErr {
         UvError::Option { name, reason } => {
             error(py, Kind::Option, msg, attrs![py; "option" => name, "reason" => reason])
         }
+        UvError::AngleSum { entry, vertex, value, reason } => error(
+            py,
+            Kind::AngleSum,
+            msg,
+            attrs![py; "option" => "angle_sums", "reason" => reason, "entry" => entry, "vertex" => vertex, "value" => value],
+        ),
     }
 }
 

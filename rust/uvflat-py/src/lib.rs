@@ -109,6 +109,9 @@ fn read_options(py: Python<'_>, options: Option<&Bound<'_, PyDict>>) -> PyResult
                     attrs![py; "option" => name.clone(), "reason" => reason],
                 )
             })?)
+        } else if let Ok(pair) = v.cast::<PyTuple>() {
+            // A pair of arrays: values at chosen mesh vertices (abf's angle_sums).
+            OptionValue::VertexValues(read_vertex_values(py, &name, pair)?)
         } else if let Ok(i) = v.extract::<i64>() {
             // Integer-like objects (numpy integers) via __index__.
             OptionValue::Int(i)
@@ -128,6 +131,35 @@ fn read_options(py: Python<'_>, options: Option<&Bound<'_, PyDict>>) -> PyResult
         out.push((name, value));
     }
     Ok(out)
+}
+
+/// An option given as a pair `(vertex indices (K,), values (K,))`: typed errors naming the
+/// entry (an index that is negative or too large for u32 is an `AngleSumError`; its range
+/// against the mesh is checked by the core).
+fn read_vertex_values(py: Python<'_>, name: &str, pair: &Bound<'_, PyTuple>) -> PyResult<Vec<(u32, f64)>> {
+    if pair.len() != 2 {
+        let reason = format!("expected a pair (vertex indices, values), got a tuple of {} items", pair.len());
+        return Err(error(py, Kind::Option, format!("option {name}: {reason}"), attrs![py; "option" => name.to_string(), "reason" => reason]));
+    }
+    let (idx, _) = indices(&pair.get_item(0)?, name, Layout::Vector("K"), |entry, vertex| {
+        let reason = format!("vertex index {vertex} out of range");
+        error(
+            py,
+            Kind::AngleSum,
+            format!("option {name}, entry {entry}: {reason}"),
+            attrs![py; "option" => name.to_string(), "reason" => reason, "entry" => entry, "vertex" => vertex],
+        )
+    })?;
+    let (vals, n_vals) = floats(&pair.get_item(1)?, name, Layout::Vector("K"))?;
+    if n_vals != idx.len() {
+        return Err(error(
+            py,
+            Kind::Input,
+            format!("{name}: {} vertex indices but {n_vals} values", idx.len()),
+            attrs![py; "argument" => name.to_string()],
+        ));
+    }
+    Ok(idx.into_iter().zip(vals).collect())
 }
 
 /// Seam vertex pairs `(E, 2)`, typed errors naming the seam.

@@ -19,7 +19,9 @@
 //! * wheel (sine law, log form): around every interior vertex v, over its triangles (v, a, b)
 //!   in their own orientation, `Σ log sin α_b − Σ log sin α_a = 0` (the edge-length ratios
 //!   |va|/|vb| = sin α_b / sin α_a multiply to one around v);
-//! * with [`AbfBoundary::Convex`], every vertex of the outer boundary loop has angle sum ≤ π.
+//! * with [`AbfBoundary::Convex`], every vertex of the outer boundary loop has angle sum at
+//!   most the cap `π − π/n` (n outer vertices), every angle is at least a small lower bound,
+//!   and holes are closed (see "Convex boundary" below).
 //!
 //! Angles satisfying these are those of a planar triangulation (locally injective when all are
 //! in (0, π)), so the UVs follow by a least-squares reconstruction: LSCM driven by the solved
@@ -61,17 +63,54 @@
 //! Convergence: the iteration stops when the largest constraint residual (radians, or log
 //! units for the wheel condition) is below `tolerance` and the Lagrangian gradient, scaled to
 //! angle units (`|∂L/∂α_c| β_c² / 2`), is below `√tolerance` (3e-5 rad by default), so that
-//! the angles are near the optimum, not merely consistent. Convex boundary: an active-set loop; outer-loop vertices whose angle sum
-//! exceeds π get the equality "sum = π"; an active vertex whose multiplier turns negative (the
-//! inequality would pull the sum below π without it) is released; repeat until the active set
-//! is stable (at most [`MAX_ACTIVE_SET_ROUNDS`] rounds).
+//! the angles are near the optimum, not merely consistent.
 //!
-//! Failure modes: no convergence within `max_iterations` Newton steps (per active-set round),
+//! Convex boundary ([`AbfBoundary::Convex`], in the spirit of R. Zayer, C. Rössl, H.-P. Seidel,
+//! "Convex boundary angle based flattening", VMV 2003: ABF with every boundary angle sum
+//! bounded by π). A triangulated disk whose angles satisfy the ABF constraints,
+//! all in (0, π), with every outer angle sum below π is a locally injective map with a
+//! strictly convex outline, hence globally bijective. Three points make this well posed:
+//! * Holes: every boundary loop but the outer (longest) one is filled with a virtual fan
+//!   ([`super::fixed_boundary::fill_holes`]); the fan's centre is an interior vertex with the
+//!   planarity and wheel conditions, so the holes close up exactly and the filled chart is a
+//!   disk. Only the outer loop is convexified (a hole's own angle sums are ≥ π by nature);
+//!   the virtual triangles are dropped before the reconstruction.
+//! * Cap below π: with every sum ≤ π exactly, the optimum of a wiggly outline (alligator)
+//!   straightens long runs of the boundary, and a triangle with two vertices on one straight
+//!   run (a chord of the boundary) must be flat: the problem has no solution with positive
+//!   angles. The cap `π − π/n` ([`convex_cap`]) makes the outline strictly convex, every outer
+//!   vertex turning by at least half the mean turning `2π/n`. Gauss–Bonnet (the turnings of a
+//!   disk's outline add up to 2π) stays satisfiable: `n · π/n = π < 2π`.
+//! * Lower bound on angles: the energy is finite at α = 0, and on triangles with all three
+//!   vertices on the boundary (ears, fins) no wheel condition keeps angles away from 0, so the
+//!   convex optimum can degenerate there. Every angle is bounded below by
+//!   `min(π/(4n), min β / 2)` ([`convex_lower_bound`]); an ear at the cap keeps angles ≥ this
+//!   bound at its two other corners, and the bound sums to at most π/2 over the outline.
+//!
+//! The inequalities are solved by a primal-dual interior-point Newton iteration on the same
+//! system, with no active set. Each outer vertex gets the row `sum + s = cap` with a slack
+//! `s > 0` and multiplier `λ > 0`; each angle the bound `α ≥ lower` with multiplier `z > 0`;
+//! the complementarity conditions `λ s = μ`, `z (α − lower) = μ` are linearised and the slack
+//! and bound multipliers eliminated, which adds `s/λ` to the diagonal of the reduced ABF++
+//! matrix (or `−s/λ` to the KKT matrix of plain ABF) and `z/(α − lower)` to the diagonal
+//! angle Hessian: the ABF++ structure and its single symbolic analysis are unchanged, and the
+//! reduced matrix stays positive definite. Steps keep slacks and multipliers positive
+//! (fraction to the boundary 0.995); μ starts at `CONVEX_MU_START` and falls superlinearly
+//! (`min(0.2 m, m^1.5)` for the mean complementarity product m). An active-set iteration
+//! (fixing violated sums at π, releasing negative multipliers) was tried first and fails on
+//! alligator: fixing a run of chord-connected vertices at π drives an ear's angles to 0
+//! and Newton never converges. Convergence additionally needs every complementarity product
+//! below `tolerance`. Chord steps are not used with inequalities. The result: every outer
+//! sum ≤ cap + residual < π.
+//!
+//! Failure modes: no convergence within `max_iterations` Newton steps,
 //! a singular or indefinite linear system, or solved angles outside (0, π). [`solve`] then
 //! falls back to plain LSCM with the 3D angles and says why in [`ChartSolution::fallback`].
 //!
-//! Preconditions: a chart that is a disk (possibly with holes). Holes are not constrained to
-//! close up (as in the papers): on a chart with holes the reconstruction is least squares.
+//! Preconditions: a chart that is a disk (possibly with holes). With a free boundary, holes
+//! are not constrained to close up (as in the papers): on a chart with holes the
+//! reconstruction is least squares and may flip triangles near the holes; the convex boundary
+//! closes them (above).
 
 use std::f64::consts::PI;
 
@@ -90,8 +129,18 @@ const CHORD_CONTRACTION: f64 = 0.5;
 /// refactors).
 const CHORD_MAX_PREDICTED: f64 = 3.0;
 
-/// Most active-set rounds of [`AbfBoundary::Convex`].
-pub const MAX_ACTIVE_SET_ROUNDS: usize = 20;
+/// Interior-point start of [`AbfBoundary::Convex`]: least initial slack of an outer vertex
+/// (radians) ...
+const CONVEX_SLACK_START: f64 = 0.05;
+/// ... its initial multiplier (on the scale of the energy gradient `2(α − β)/β²` for angle
+/// changes of a sizeable fraction of a radian) ...
+const CONVEX_DUAL_START: f64 = 5.0;
+/// ... and the initial barrier parameter (the corner lower bounds start at multiplier
+/// `CONVEX_MU_START / (β − lower)`).
+const CONVEX_MU_START: f64 = 1e-2;
+/// An outer vertex whose sum is within this of the cap is reported in
+/// [`AbfAngles::convex_active`].
+const CONVEX_ACTIVE: f64 = 1e-6;
 
 /// Which linear algebra performs each Newton step.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -119,7 +168,8 @@ pub enum AbfBoundary {
     /// No constraint on boundary vertices. Default.
     #[default]
     Free,
-    /// Every vertex of the outer boundary loop has an angle sum ≤ π: the UV outline is convex.
+    /// Every vertex of the outer boundary loop has an angle sum ≤ π − π/n: the UV outline is
+    /// strictly convex and the map bijective; holes are closed (see the module docs).
     Convex,
 }
 
@@ -134,21 +184,31 @@ impl AbfBoundary {
 }
 
 /// Options of [`solve`] and [`solve_angles`].
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct AbfOptions {
     /// Linear algebra of the Newton step. Default [`AbfSolver::AbfPlusPlus`].
     pub solver: AbfSolver,
-    /// Most Newton iterations (per active-set round for a convex boundary). Default 30.
+    /// Most Newton iterations. Default 30.
     pub max_iterations: usize,
     /// Stop when the largest constraint residual is below this. Default 1e-9.
     pub tolerance: f64,
     /// Boundary constraint. Default [`AbfBoundary::Free`].
     pub boundary: AbfBoundary,
+    /// Prescribed angle sums `(mesh vertex, sum in radians)`, used by [`solve`] (see
+    /// [`solve_with_sums`]): every chart vertex of a listed mesh vertex gets the sum, so a mesh
+    /// vertex split by a seam has it on each side. Default empty.
+    pub angle_sums: Vec<(u32, f64)>,
 }
 
 impl Default for AbfOptions {
     fn default() -> Self {
-        AbfOptions { solver: AbfSolver::AbfPlusPlus, max_iterations: 30, tolerance: 1e-9, boundary: AbfBoundary::Free }
+        AbfOptions {
+            solver: AbfSolver::AbfPlusPlus,
+            max_iterations: 30,
+            tolerance: 1e-9,
+            boundary: AbfBoundary::Free,
+            angle_sums: Vec::new(),
+        }
     }
 }
 
@@ -159,17 +219,18 @@ pub struct AbfAngles {
     pub alpha: Vec<[f64; 3]>,
     /// Target angles β (3D angles, interior vertices scaled to 2π).
     pub beta: Vec<[f64; 3]>,
-    /// Newton iterations done (all active-set rounds), chord steps included.
+    /// Newton iterations done, chord steps included.
     pub iterations: usize,
-    /// Matrix factorizations done (all active-set rounds): the dominant cost.
+    /// Matrix factorizations done: the dominant cost.
     pub factorizations: usize,
-    /// Largest constraint residual at the end (including convex-boundary violations).
+    /// Largest constraint residual at the end (convex boundary: `sum + slack − cap` rows too).
     pub residual: f64,
     /// Largest scaled Lagrangian gradient `|∂L/∂α_c| β_c² / 2` at the end (radians).
     pub stationarity: f64,
-    /// Whether the tolerances were met (and, for a convex boundary, the active set settled).
+    /// Whether the tolerances were met (convex boundary: complementarity products too).
     pub converged: bool,
-    /// Outer-boundary vertices held at angle sum π (convex boundary only), ascending.
+    /// Outer-boundary vertices whose angle sum ended within 1e-6 of the cap [`convex_cap`]
+    /// (convex boundary only), ascending.
     pub convex_active: Vec<u32>,
 }
 
@@ -178,6 +239,8 @@ pub struct AbfAngles {
 struct Row {
     vertex: u32,
     wheel: bool,
+    /// A sum row that is the inequality "sum ≤ target" (convex boundary), by a slack.
+    ineq: bool,
 }
 
 /// Most constraint rows touching one triangle (sum and wheel rows of its three vertices).
@@ -236,12 +299,17 @@ struct Problem<'a> {
     /// `row_idx`; triangle `f`'s pairs start at `slot_start[f]`.
     slots: Vec<u32>,
     slot_start: Vec<u32>,
+    /// Whether any row is an inequality (interior-point iteration).
+    has_ineq: bool,
+    /// Lower bound of every angle (interior-point iteration), or 0 for none.
+    lower: f64,
 }
 
 impl<'a> Problem<'a> {
     /// `sum_target[v]`: the angle sum vertex `v` must reach (2π at interior vertices unless
-    /// prescribed, π at active convex-boundary vertices, any prescribed value), or `None`.
-    fn new(tris: &'a [[u32; 3]], beta: Vec<f64>, interior: &[bool], sum_target: &[Option<f64>]) -> Self {
+    /// prescribed, any prescribed value, the convex cap at outer-loop vertices), or `None`;
+    /// `ineq[v]`: the sum of `v` need only stay at or below its target.
+    fn new(tris: &'a [[u32; 3]], beta: Vec<f64>, interior: &[bool], sum_target: &[Option<f64>], ineq: &[bool]) -> Self {
         let n = interior.len();
         let mut sum_row = vec![u32::MAX; n];
         let mut wheel_row = vec![u32::MAX; n];
@@ -250,12 +318,12 @@ impl<'a> Problem<'a> {
         for v in 0..n {
             if let Some(t) = sum_target[v] {
                 sum_row[v] = rows.len() as u32;
-                rows.push(Row { vertex: v as u32, wheel: false });
+                rows.push(Row { vertex: v as u32, wheel: false, ineq: ineq[v] });
                 target.push(t);
             }
             if interior[v] {
                 wheel_row[v] = rows.len() as u32;
-                rows.push(Row { vertex: v as u32, wheel: true });
+                rows.push(Row { vertex: v as u32, wheel: true, ineq: false });
                 target.push(0.0);
             }
         }
@@ -278,11 +346,17 @@ impl<'a> Problem<'a> {
         let w = beta.iter().map(|b| 1.0 / (b * b)).collect();
         let m = rows.len();
         let (col_ptr, row_idx, slots, slot_start) = reduced_pattern(m, &face_rows);
-        Problem { tris, beta, w, rows, target, face_rows, col_ptr, row_idx, slots, slot_start }
+        let has_ineq = rows.iter().any(|r| r.ineq);
+        Problem { tris, beta, w, rows, target, face_rows, col_ptr, row_idx, slots, slot_start, has_ineq, lower: 0.0 }
     }
 
     fn m(&self) -> usize {
         self.rows.len()
+    }
+
+    /// Index in `row_idx` of the diagonal entry of row `r` (the last of its column).
+    fn diagonal_slot(&self, r: usize) -> usize {
+        self.col_ptr[r + 1] - 1
     }
 }
 
@@ -350,13 +424,20 @@ fn reduced_pattern(m: usize, face_rows: &[FaceRows]) -> (Vec<usize>, Vec<usize>,
 }
 
 /// Newton state: angles and multipliers (vertex multipliers per vertex so that they survive a
-/// change of the active set).
+/// change of the constraint set).
 #[derive(Clone)]
 struct State {
     alpha: Vec<f64>,
     lam_tri: Vec<f64>,
     lam_sum: Vec<f64>,
     lam_wheel: Vec<f64>,
+    /// Slack of every inequality sum row, per vertex (sum + slack = target, slack > 0); the
+    /// row's multiplier `lam_sum` is then its dual variable, > 0.
+    slack: Vec<f64>,
+    /// Barrier parameter: the target of every product slack × multiplier.
+    mu: f64,
+    /// Multiplier of every corner's lower bound `α ≥ lower` (empty without bounds).
+    z_lo: Vec<f64>,
 }
 
 /// Residual and Newton ingredients of one triangle at the current state.
@@ -378,10 +459,16 @@ struct FaceEval {
 /// Residuals and Newton ingredients at the current state.
 struct Eval {
     faces: Vec<FaceEval>,
-    /// Constraint residual per row.
-    c_row: Vec<f64>,
+    /// Right-hand side residual of the Newton system per row: `c_row`, except on inequality
+    /// rows `sum − target + μ/λ` (the slack eliminated through its complementarity equation).
+    c_newton: Vec<f64>,
+    /// Per row, `slack/λ` on inequality rows (the eliminated slack's diagonal), else 0; empty
+    /// without inequality rows.
+    diag: Vec<f64>,
     residual: f64,
     stationarity: f64,
+    /// Largest product slack × multiplier of the inequality rows (0 without).
+    complementarity: f64,
 }
 
 /// Residuals, Lagrangian gradient and Hessian at the state.
@@ -431,6 +518,26 @@ fn evaluate(p: &Problem<'_>, s: &State) -> Eval {
                 grad[k] += s.lam_sum[v];
             }
         }
+        let mut stat: f64 = 0.0;
+        let mut fallback_hess = energy_hess;
+        if p.lower > 0.0 {
+            // Lower bounds α ≥ lower, primal-dual: the bound's multiplier z enters the
+            // gradient as −z; the Newton system, with dz eliminated through z (α − lower) = μ,
+            // sees the Hessian + z/(α − lower) and the gradient with −μ/(α − lower) for −z.
+            for k in 0..3 {
+                let c = 3 * f + k;
+                let gap = a[k] - p.lower;
+                let z = s.z_lo[c];
+                stat = stat.max((grad[k] - z).abs() / energy_hess[k]);
+                hess[k] += z / gap;
+                fallback_hess[k] += z / gap;
+                grad[k] -= s.mu / gap;
+            }
+        } else {
+            for k in 0..3 {
+                stat = stat.max(grad[k].abs() / energy_hess[k]);
+            }
+        }
         // Exact Hessian where the triangle's projected Hessian is safely positive definite.
         let neg = hess.iter().filter(|&&h| h <= 0.0).count();
         let exact_ok = neg == 0 || {
@@ -439,11 +546,7 @@ fn evaluate(p: &Problem<'_>, s: &State) -> Eval {
             neg == 1 && inv.iter().all(|x| x.is_finite()) && inv[0] + inv[1] + inv[2] < -PROJECTED_HESSIAN_MARGIN * largest
         };
         if !exact_ok {
-            hess = energy_hess;
-        }
-        let mut stat: f64 = 0.0;
-        for k in 0..3 {
-            stat = stat.max(grad[k].abs() / energy_hess[k]);
+            hess = fallback_hess;
         }
         fe.cot = ct;
         fe.grad = grad;
@@ -457,9 +560,33 @@ fn evaluate(p: &Problem<'_>, s: &State) -> Eval {
             c_row[row.0 as usize] += term;
         }
     }
+    let mut complementarity: f64 = 0.0;
+    if p.lower > 0.0 {
+        for (a, z) in s.alpha.iter().zip(&s.z_lo) {
+            complementarity = complementarity.max(z * (a - p.lower));
+        }
+    }
+    let (mut c_newton, mut diag) = (Vec::new(), Vec::new());
+    if p.has_ineq {
+        c_newton = c_row.clone();
+        diag = vec![0.0; c_row.len()];
+        for (r, row) in p.rows.iter().enumerate() {
+            if row.ineq {
+                let v = row.vertex as usize;
+                let (sl, z) = (s.slack[v], s.lam_sum[v]);
+                c_newton[r] = c_row[r] + s.mu / z;
+                c_row[r] += sl;
+                diag[r] = sl / z;
+                complementarity = complementarity.max(sl * z);
+            }
+        }
+    }
     let residual = faces.iter().map(|fe| fe.c_tri).chain(c_row.iter().copied()).fold(0.0f64, |m, x| m.max(x.abs()));
     let stationarity = faces.iter().fold(0.0f64, |m, fe| m.max(fe.stationarity));
-    Eval { faces, c_row, residual, stationarity }
+    if !p.has_ineq {
+        c_newton = c_row;
+    }
+    Eval { faces, c_newton, diag, residual, stationarity, complementarity }
 }
 
 /// Relative margin of the projected-Hessian test in [`evaluate`].
@@ -630,10 +757,15 @@ fn step_plus_plus(w: &mut PlusPlus, p: &Problem<'_>, e: &Eval, mode: Mode) -> Re
     let refresh = mode == Mode::Factor;
     let nf = p.tris.len();
     let m = p.m();
-    let mut rhs = e.c_row.clone();
+    let mut rhs = e.c_newton.clone();
     if refresh {
         w.vals.clear();
         w.vals.resize(p.row_idx.len(), 0.0);
+        for (r, &d) in e.diag.iter().enumerate() {
+            if d != 0.0 {
+                w.vals[p.diagonal_slot(r)] += d;
+            }
+        }
     }
     w.dinv.resize(nf, 0.0);
     w.r1.resize(nf, 0.0);
@@ -738,10 +870,16 @@ fn step_plain(slot: &mut Option<FixedValueSolver>, p: &Problem<'_>, e: &Eval, mo
             }
         }
     }
+    for (r, &d) in e.diag.iter().enumerate() {
+        if d != 0.0 {
+            let row = (4 * nf + r) as u32;
+            trip.push((row, row, -d));
+        }
+    }
     let mut rhs = Vec::with_capacity(n);
     rhs.extend(e.faces.iter().flat_map(|fe| fe.grad.map(|x| -x)));
     rhs.extend(e.faces.iter().map(|fe| -fe.c_tri));
-    rhs.extend(e.c_row.iter().map(|x| -x));
+    rhs.extend(e.c_newton.iter().map(|x| -x));
     match slot {
         Some(_) if mode == Mode::Chord => {}
         Some(s) => {
@@ -776,17 +914,17 @@ fn newton(p: &Problem<'_>, s: &mut State, opts: &AbfOptions) -> Result<Run, Solv
         if !(e.residual.is_finite() && e.stationarity.is_finite()) {
             return Ok(run(false));
         }
-        if e.residual < opts.tolerance && e.stationarity < stat_tol {
+        if e.residual < opts.tolerance && e.stationarity < stat_tol && e.complementarity < opts.tolerance {
             return Ok(run(true));
         }
         if it >= opts.max_iterations {
             return Ok(run(false));
         }
         // Near the solution try a chord step first; keep it if it cuts both errors enough.
-        if factorizations > 0 && e.residual < CHORD_RESIDUAL && !refactor_next {
+        if factorizations > 0 && e.residual < CHORD_RESIDUAL && !refactor_next && !p.has_ineq {
             let step = lin.step(p, &e, Mode::Chord)?;
             let mut trial = s.clone();
-            apply_step(p, &mut trial, &step);
+            apply_step(p, &mut trial, &step, &e, opts.tolerance);
             let et = evaluate(p, &trial);
             let cut = |new: f64, old: f64, tol: f64| new <= CHORD_CONTRACTION * old || new < tol;
             if cut(et.residual, e.residual, opts.tolerance) && cut(et.stationarity, e.stationarity, stat_tol) {
@@ -810,22 +948,64 @@ fn newton(p: &Problem<'_>, s: &mut State, opts: &AbfOptions) -> Result<Run, Solv
         let step = lin.step(p, &e, Mode::Factor)?;
         factorizations += 1;
         refactor_next = false;
-        apply_step(p, s, &step);
+        apply_step(p, s, &step, &e, opts.tolerance);
         e = evaluate(p, s);
         it += 1;
     }
 }
 
-/// Take the step, shortened so that no angle leaves (0, π) (fraction to the boundary 0.9).
-fn apply_step(p: &Problem<'_>, s: &mut State, (steps, dl): &Step) {
+/// Take the step, shortened so that no angle leaves (0, π) (fraction to the boundary 0.9) and
+/// no slack or inequality multiplier reaches 0 (fraction to the boundary 0.995); then lower
+/// the barrier parameter.
+///
+/// The slack step follows from the linearised complementarity `λ s = μ`:
+/// `ds = μ/λ − s − (s/λ) dλ`. The new barrier parameter is `min(0.2 m, m^1.5)` for the mean
+/// product `m` of slack and multiplier (superlinear once `m` is small), at least `tolerance/10`.
+fn apply_step(p: &Problem<'_>, s: &mut State, (steps, dl): &Step, e: &Eval, tolerance: f64) {
     let mut t: f64 = 1.0;
+    // Angles stay in (lower, π): fraction to the boundary 0.9, or 0.995 with bounds.
+    let ftb = if p.lower > 0.0 { 0.995 } else { 0.9 };
     for (a, st) in s.alpha.chunks_exact(3).zip(steps) {
         for q in 0..3 {
             let d = st.da[q];
             if d < 0.0 {
-                t = t.min(0.9 * a[q] / -d);
+                t = t.min(ftb * (a[q] - p.lower) / -d);
             } else if d > 0.0 {
                 t = t.min(0.9 * (PI - a[q]) / d);
+            }
+        }
+    }
+    // Bound multipliers: dz = μ/gap − z − (z/gap) dα, kept positive.
+    let mut dz = Vec::new();
+    if p.lower > 0.0 {
+        dz.reserve(s.alpha.len());
+        for (f, st) in steps.iter().enumerate() {
+            for q in 0..3 {
+                let c = 3 * f + q;
+                let gap = s.alpha[c] - p.lower;
+                let z = s.z_lo[c];
+                let d = s.mu / gap - z - z / gap * st.da[q];
+                if d < 0.0 {
+                    t = t.min(0.995 * z / -d);
+                }
+                dz.push(d);
+            }
+        }
+    }
+    let mut ds = Vec::new();
+    if p.has_ineq {
+        ds.resize(p.m(), 0.0);
+        for (r, row) in p.rows.iter().enumerate() {
+            if row.ineq {
+                let v = row.vertex as usize;
+                let (sl, z) = (s.slack[v], s.lam_sum[v]);
+                ds[r] = s.mu / z - sl - e.diag[r] * dl[r];
+                if ds[r] < 0.0 {
+                    t = t.min(0.995 * sl / -ds[r]);
+                }
+                if dl[r] < 0.0 {
+                    t = t.min(0.995 * z / -dl[r]);
+                }
             }
         }
     }
@@ -835,10 +1015,39 @@ fn apply_step(p: &Problem<'_>, s: &mut State, (steps, dl): &Step) {
         }
         *l += t * st.dt;
     }
+    let (mut prod, mut count) = (0.0, 0usize);
+    for (c, d) in dz.iter().enumerate() {
+        s.z_lo[c] += t * d;
+        prod += s.z_lo[c] * (s.alpha[c] - p.lower);
+        count += 1;
+    }
     for (r, row) in p.rows.iter().enumerate() {
         let lam = if row.wheel { &mut s.lam_wheel } else { &mut s.lam_sum };
         lam[row.vertex as usize] += t * dl[r];
+        if row.ineq {
+            let v = row.vertex as usize;
+            s.slack[v] += t * ds[r];
+            prod += s.slack[v] * s.lam_sum[v];
+            count += 1;
+        }
     }
+    if count > 0 {
+        let m = prod / count as f64;
+        s.mu = (0.2 * m).min(m.powf(1.5)).max(0.1 * tolerance);
+    }
+}
+
+/// Largest angle sum of an outer-loop vertex under [`AbfBoundary::Convex`] on a loop of
+/// `n` vertices: `π − π/n`, so that every outer vertex turns by at least half the mean turning
+/// `2π/n` (a strictly convex outline; see the module docs).
+pub fn convex_cap(n: usize) -> f64 {
+    PI - PI / n.max(1) as f64
+}
+
+/// Lower bound of every angle under [`AbfBoundary::Convex`] on an outer loop of `n` vertices:
+/// a quarter of the least turning `π/n` (see [`convex_cap`] and the module docs).
+pub fn convex_lower_bound(n: usize) -> f64 {
+    0.25 * PI / n.max(1) as f64
 }
 
 /// Targets β: the clamped 3D angles, scaled at every interior vertex to sum to 2π.
@@ -899,7 +1108,8 @@ pub fn solve_angles(chart: &Chart, options: &AbfOptions) -> Result<AbfAngles, Ch
 /// Springborn, Schröder 2006: a sum other than 2π cannot be flattened without a cut through
 /// it, so the LSCM reconstruction is then least squares); at a boundary vertex it constrains
 /// the boundary angle (π keeps the boundary straight there, π/2 makes a right-angled corner).
-/// Prescribed boundary vertices are never released by the convex-boundary active set.
+/// With [`AbfBoundary::Convex`], a prescribed outer vertex keeps its prescribed sum instead of
+/// the cap, and a prescribed hole vertex is refused (holes are filled; a [`ChartFailure`]).
 ///
 /// Preconditions: as [`solve_angles`]; every sum in (0, 2π·valence) and finite (a sum the
 /// triangles cannot reach leaves the solve unconverged, and the caller falls back). For a
@@ -910,6 +1120,47 @@ pub fn solve_angles_with_sums(
     options: &AbfOptions,
     prescribed: &[(u32, f64)],
 ) -> Result<AbfAngles, ChartFailure> {
+    if options.boundary == AbfBoundary::Convex && chart.boundary_loops.len() > 1 {
+        // Fill the holes with virtual fans so that they close up; solve on the filled disk,
+        // keep the chart's own triangles.
+        let outer = chart.outer_loop().expect("a chart with boundary loops");
+        for (l, lp) in chart.boundary_loops.iter().enumerate() {
+            if l == outer {
+                continue;
+            }
+            if let Some(&(v, _)) = prescribed.iter().find(|(v, _)| lp.contains(v)) {
+                return Err(ChartFailure(format!(
+                    "abf: a prescribed angle sum at hole vertex {v} cannot be combined with boundary=\"convex\" (holes are filled)"
+                )));
+            }
+        }
+        let filled = filled_chart(chart);
+        let nf = chart.triangles.len();
+        let mut a = solve_filled(&filled, options, prescribed)?;
+        a.alpha.truncate(nf);
+        a.beta.truncate(nf);
+        return Ok(a);
+    }
+    solve_filled(chart, options, prescribed)
+}
+
+/// The chart with every hole (boundary loop but the outer one) filled by a virtual fan
+/// ([`super::fixed_boundary::fill_holes`]): a disk whose first triangles and vertices are the
+/// chart's. Only the fields the angle solve reads are meaningful.
+fn filled_chart(chart: &Chart) -> Chart {
+    let ext = super::fixed_boundary::fill_holes(chart);
+    let mut c = chart.clone();
+    c.mesh_vertex.resize(ext.positions.len(), u32::MAX);
+    c.triangle_face.resize(ext.triangles.len(), u32::MAX);
+    c.positions = ext.positions;
+    c.triangles = ext.triangles;
+    c.boundary_loops = vec![ext.outer];
+    c.kind = crate::unwrap::ChartKind::Disk;
+    c
+}
+
+/// [`solve_angles_with_sums`] on a chart whose holes, if any, are not to be closed.
+fn solve_filled(chart: &Chart, options: &AbfOptions, prescribed: &[(u32, f64)]) -> Result<AbfAngles, ChartFailure> {
     let tris = &chart.triangles;
     let nf = tris.len();
     let n = chart.positions.len();
@@ -932,81 +1183,105 @@ pub fn solve_angles_with_sums(
     let beta3 = target_angles_with_sums(chart, prescribed);
     let beta: Vec<f64> = beta3.iter().flatten().copied().collect();
     let interior: Vec<bool> = chart.boundary_mask().iter().map(|b| !b).collect();
-    let mut active = vec![false; n];
     let outer: Vec<u32> = match (options.boundary, chart.outer_loop()) {
         (AbfBoundary::Convex, Some(l)) => chart.boundary_loops[l].clone(),
         _ => Vec::new(),
     };
-    let mut s = State { alpha: beta.clone(), lam_tri: vec![0.0; nf], lam_sum: vec![0.0; n], lam_wheel: vec![0.0; n] };
-    let mut iterations = 0;
-    let mut factorizations = 0;
-    let mut rounds = 0;
-    let (converged, mut residual, stationarity) = loop {
-        let sum_target: Vec<Option<f64>> = (0..n)
-            .map(|v| {
-                fixed_sum[v].or(if interior[v] {
-                    Some(2.0 * PI)
-                } else if active[v] {
-                    Some(PI)
-                } else {
-                    None
-                })
-            })
-            .collect();
-        let p = Problem::new(tris, beta.clone(), &interior, &sum_target);
-        let run = newton(&p, &mut s, options).map_err(|e| ChartFailure(format!("abf: {e}")))?;
-        iterations += run.iterations;
-        factorizations += run.factorizations;
-        rounds += 1;
-        if !run.converged || outer.is_empty() {
-            break (run.converged, run.residual, run.stationarity);
-        }
-        // Active set of the convex boundary.
-        let sums = vertex_sums(chart, &s.alpha);
-        let mut changed = false;
-        for &v in &outer {
-            let v = v as usize;
-            if fixed_sum[v].is_some() {
-                continue;
-            }
-            if !active[v] && sums[v] > PI + options.tolerance {
-                active[v] = true;
-                s.lam_sum[v] = 0.0;
-                changed = true;
-            } else if active[v] && s.lam_sum[v] < -1e-12 {
-                active[v] = false;
-                s.lam_sum[v] = 0.0;
-                changed = true;
-            }
-        }
-        if !changed {
-            break (true, run.residual, run.stationarity);
-        }
-        if rounds >= MAX_ACTIVE_SET_ROUNDS {
-            break (false, run.residual, run.stationarity);
-        }
-    };
-    if !outer.is_empty() {
-        let sums = vertex_sums(chart, &s.alpha);
-        for &v in &outer {
-            if fixed_sum[v as usize].is_none() {
-                residual = residual.max(sums[v as usize] - PI);
-            }
+    let cap = convex_cap(outer.len());
+    let mut ineq = vec![false; n];
+    for &v in &outer {
+        ineq[v as usize] = fixed_sum[v as usize].is_none();
+    }
+    let sum_target: Vec<Option<f64>> = (0..n)
+        .map(|v| fixed_sum[v].or(if interior[v] { Some(2.0 * PI) } else if ineq[v] { Some(cap) } else { None }))
+        .collect();
+    // Interior-point start for the inequality rows: slack = distance of the target sum below
+    // the cap (at least CONVEX_SLACK_START), multiplier CONVEX_DUAL_START.
+    let beta_sums = vertex_sums(chart, &beta);
+    let mut slack = vec![0.0; n];
+    let mut lam_sum = vec![0.0; n];
+    for v in 0..n {
+        if ineq[v] {
+            slack[v] = (cap - beta_sums[v]).max(CONVEX_SLACK_START);
+            lam_sum[v] = CONVEX_DUAL_START;
         }
     }
+    let mut p = Problem::new(tris, beta.clone(), &interior, &sum_target, &ineq);
+    let mut z_lo = Vec::new();
+    if p.has_ineq {
+        let beta_min = beta.iter().copied().fold(f64::INFINITY, f64::min);
+        p.lower = convex_lower_bound(outer.len()).min(0.5 * beta_min);
+        if p.lower > 0.0 {
+            z_lo = beta.iter().map(|&b| CONVEX_MU_START / (b - p.lower).max(CONVEX_SLACK_START)).collect();
+        }
+    }
+    let mut s = State { alpha: beta.clone(), lam_tri: vec![0.0; nf], lam_sum, lam_wheel: vec![0.0; n], slack, mu: CONVEX_MU_START, z_lo };
+    let run = newton(&p, &mut s, options).map_err(|e| ChartFailure(format!("abf: {e}")))?;
+    let (iterations, factorizations, converged, residual, stationarity) =
+        (run.iterations, run.factorizations, run.converged, run.residual, run.stationarity);
+    let sums = vertex_sums(chart, &s.alpha);
+    let active = |v: usize| ineq[v] && sums[v] > cap - CONVEX_ACTIVE;
     let alpha: Vec<[f64; 3]> = s.alpha.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
-    let convex_active = (0..n as u32).filter(|&v| active[v as usize]).collect();
+    let convex_active = (0..n as u32).filter(|&v| active(v as usize)).collect();
     Ok(AbfAngles { alpha, beta: beta3, iterations, factorizations, residual, stationarity, converged, convex_active })
 }
 
 /// ABF / ABF++ of one chart: solve the angles, then reconstruct UVs with LSCM driven by them
-/// (pins as in [`lscm::solve_with_angles`]).
+/// (pins as in [`lscm::solve_with_angles`]). [`AbfOptions::angle_sums`] (mesh vertices) are
+/// applied to every chart vertex of a listed mesh vertex (see [`solve_with_sums`]).
 ///
 /// When the angle solve fails (no convergence, a linear system that cannot be factored, or
 /// angles outside (0, π)), the chart is mapped by plain LSCM with its 3D angles and the
 /// solution carries a [`Fallback`] saying why. Failures: those of the LSCM solve.
 pub fn solve(chart: &Chart, pins: &[(u32, [f64; 2])], options: &AbfOptions) -> Result<ChartSolution, ChartFailure> {
-    solve_with_sums(chart, pins, options, &[])
+    if options.angle_sums.is_empty() {
+        return solve_with_sums(chart, pins, options, &[]);
+    }
+    let by_mesh_vertex: std::collections::HashMap<u32, f64> = options.angle_sums.iter().copied().collect();
+    let prescribed: Vec<(u32, f64)> = chart
+        .mesh_vertex
+        .iter()
+        .enumerate()
+        .filter_map(|(cv, mv)| by_mesh_vertex.get(mv).map(|&t| (cv as u32, t)))
+        .collect();
+    solve_with_sums(chart, pins, options, &prescribed)
+}
+
+/// Check prescribed angle sums `(mesh vertex, sum)` against a mesh whose vertex `v` has
+/// `corners[v]` face corners: the vertex exists and is used by a face, is listed once, and the
+/// sum is finite with `0 < sum < 2π · corners[v]` (every polygon corner angle is below 2π).
+/// Without a mesh (`corners` empty) only the sum's finiteness and sign and duplicates are
+/// checked.
+///
+/// Errors: [`UvError::AngleSum`] naming the entry and the vertex.
+pub fn validate_angle_sums(sums: &[(u32, f64)], corners: &[u32]) -> crate::error::Result<()> {
+    use crate::error::UvError;
+    let bad = |entry: usize, vertex: u32, value: f64, reason: String| UvError::AngleSum { entry, vertex: vertex as u64, value, reason };
+    let mut seen = std::collections::HashMap::new();
+    for (i, &(v, t)) in sums.iter().enumerate() {
+        if let Some(first) = seen.insert(v, i) {
+            return Err(bad(i, v, t, format!("vertex given twice (entries {first} and {i})")));
+        }
+        if !t.is_finite() {
+            return Err(bad(i, v, t, "the sum is not finite".into()));
+        }
+        if t <= 0.0 {
+            return Err(bad(i, v, t, "the sum must be positive (radians)".into()));
+        }
+        if !corners.is_empty() {
+            let Some(&k) = corners.get(v as usize) else {
+                return Err(bad(i, v, t, format!("vertex index out of range (mesh has {} vertices)", corners.len())));
+            };
+            if k == 0 {
+                return Err(bad(i, v, t, "the vertex is not used by any face".into()));
+            }
+            let most = 2.0 * PI * k as f64;
+            if t >= most {
+                return Err(bad(i, v, t, format!("the sum must be below 2π × {k} corners = {most:.6} radians")));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// [`solve`] with prescribed angle sums (see [`solve_angles_with_sums`]).

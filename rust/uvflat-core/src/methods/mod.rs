@@ -90,6 +90,9 @@ pub enum OptionValue {
     Int(i64),
     Float(f64),
     Str(String),
+    /// Values at chosen mesh vertices, `(vertex, value)` (e.g. ABF's `angle_sums`; from Python
+    /// a pair `(vertex indices, values)` of arrays).
+    VertexValues(Vec<(u32, f64)>),
 }
 
 /// Names accepted by [`Method::parse`].
@@ -107,6 +110,7 @@ fn as_float(name: &'static str, v: &OptionValue) -> Result<f64> {
         OptionValue::Int(i) => Ok(*i as f64),
         OptionValue::Bool(b) => Err(opt_err(name, format!("expected a number, got the boolean {b}"))),
         OptionValue::Str(s) => Err(opt_err(name, format!("expected a number, got the string {s:?}"))),
+        OptionValue::VertexValues(_) => Err(opt_err(name, "expected a number, got per-vertex values")),
     }
 }
 
@@ -117,6 +121,7 @@ fn as_count(name: &'static str, v: &OptionValue) -> Result<usize> {
         OptionValue::Float(x) => Err(opt_err(name, format!("expected a positive integer, got {x}"))),
         OptionValue::Bool(b) => Err(opt_err(name, format!("expected a positive integer, got the boolean {b}"))),
         OptionValue::Str(s) => Err(opt_err(name, format!("expected a positive integer, got the string {s:?}"))),
+        OptionValue::VertexValues(_) => Err(opt_err(name, "expected a positive integer, got per-vertex values")),
     }
 }
 
@@ -160,6 +165,14 @@ impl Method {
                         OptionValue::Str(s) if s == "free" => abf::AbfBoundary::Free,
                         OptionValue::Str(s) if s == "convex" => abf::AbfBoundary::Convex,
                         other => return Err(opt_err("boundary", format!("expected \"free\" or \"convex\", got {other:?}"))),
+                    }
+                }
+                ("angle_sums", "abf") => {
+                    abf_opts.angle_sums = match value {
+                        OptionValue::VertexValues(v) => v.clone(),
+                        other => {
+                            return Err(opt_err("angle_sums", format!("expected (vertex indices, sums in radians), got {other:?}")))
+                        }
                     }
                 }
                 ("max_iterations", "arap") => arap_opts.max_iterations = as_count("max_iterations", value)?,
@@ -240,6 +253,7 @@ impl Method {
             if o.max_iterations == 0 {
                 return Err(opt_err("max_iterations", "must be at least 1"));
             }
+            abf::validate_angle_sums(&o.angle_sums, &[])?;
         }
         let iterative = match self {
             Method::Arap(o) => Some((o.max_iterations, o.tolerance)),

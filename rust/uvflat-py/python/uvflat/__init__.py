@@ -18,6 +18,7 @@ UVs are per corner (Blender's "loop"), so a seam can give one vertex several UVs
 
 from ._uvflat import (
     METHODS,
+    AngleSumError,
     ChartReport,
     FaceSizeError,
     InputError,
@@ -39,6 +40,7 @@ from ._uvflat import (
 
 __all__ = [
     "METHODS",
+    "AngleSumError",
     "ChartReport",
     "FaceSizeError",
     "InputError",

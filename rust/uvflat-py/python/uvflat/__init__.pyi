@@ -161,7 +161,7 @@ def unwrap(
     pins: _Ints | None = None,
     pin_uvs: _Floats | None = None,
     fit_to: _Floats | None = None,
-    **options: bool | int | float | str,
+    **options: bool | int | float | str | tuple[_Ints, _Floats],
 ) -> UnwrapResult:
     """Unwrap the selected faces of a polygon mesh into per-corner UVs.
 
@@ -183,6 +183,12 @@ def unwrap(
             translation) onto them instead of being area-scaled at the origin.
         **options: method options: ``boundary="circle"|"square"`` for tutte, harmonic and
             mean_value; ``max_iterations: int`` and ``tolerance: float`` for spectral.
+            For abf, ``boundary="free"|"convex"`` and ``angle_sums=(vertices, sums)``: (K,)
+            mesh vertex indices and (K,) angle sums in radians that the flattened map must
+            have there (every chart copy of a vertex split by a seam gets the sum). On the
+            boundary, pi keeps the outline straight and pi/2 makes a right-angled corner; at
+            an interior vertex a sum other than 2*pi is a cone, realised exactly when a seam
+            runs from it to the boundary.
 
     Raises:
         InputError: wrong shape, dtype or length; a non-finite ``fit_to`` UV.
@@ -190,6 +196,7 @@ def unwrap(
             malformed mesh (all subclasses of MeshError).
         PinError: a pin names a missing corner or has a non-finite UV.
         OptionError: unknown method, unknown option or bad option value.
+        AngleSumError: a bad ``angle_sums`` entry (an OptionError naming entry and vertex).
         UvflatError: an internal error (a bug), never a crash.
     """
 
@@ -301,3 +308,15 @@ class OptionError(UvflatError, ValueError):
     option: str
     """Name of the option ("method" for an unknown method)."""
     reason: str
+
+class AngleSumError(OptionError):
+    """A prescribed angle sum (abf's ``angle_sums``) names a vertex that does not exist, is not
+    used by a face or is listed twice, or its sum is not finite, not positive, or not below
+    2*pi times the vertex's number of face corners."""
+
+    entry: int
+    """Position in the ``angle_sums`` arrays."""
+    vertex: int
+    """The mesh vertex named by that entry."""
+    value: float | None
+    """The prescribed sum (None when the index itself could not be read)."""
