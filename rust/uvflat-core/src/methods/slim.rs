@@ -190,14 +190,22 @@ fn pick_start(
     let start_pins: &[(u32, [f64; 2])] = if spanning { pins } else { &[] };
     let mut candidates: Vec<(Vec<[f64; 2]>, &'static str)> = Vec::new();
     let mut rejected = Vec::new();
-    if options.start == SlimStart::Auto {
-        let angles = chart_angles(&chart.positions, tris);
-        match lscm::solve_with_angles(chart, &angles, start_pins) {
-            Ok((uv, _)) => candidates.push((uv, "lscm")),
-            Err(e) => rejected.push(format!("lscm: {}", e.0)),
-        }
+    // The two candidate starts are independent solves: computed side by side.
+    let (lscm_start, mean_value_start) = rayon::join(
+        || {
+            (options.start == SlimStart::Auto).then(|| {
+                let angles = chart_angles(&chart.positions, tris);
+                lscm::solve_with_angles(chart, &angles, start_pins)
+            })
+        },
+        || fixed_boundary::solve(chart, start_pins, BoundaryShape::Circle, Weights::MeanValue),
+    );
+    match lscm_start {
+        Some(Ok((uv, _))) => candidates.push((uv, "lscm")),
+        Some(Err(e)) => rejected.push(format!("lscm: {}", e.0)),
+        None => {}
     }
-    match fixed_boundary::solve(chart, start_pins, BoundaryShape::Circle, Weights::MeanValue) {
+    match mean_value_start {
         Ok(s) => candidates.push((s.uv, "mean_value")),
         Err(e) => rejected.push(format!("mean_value: {}", e.0)),
     }
