@@ -489,12 +489,16 @@ fn pick_start(
     let tris = &chart.triangles;
     let mut candidates: Vec<(Vec<[f64; 2]>, &'static str)> = Vec::new();
     let mut rejected = Vec::new();
-    let angles = super::chart_angles(&chart.positions, tris);
-    match super::lscm::solve_with_angles(chart, &angles, &[]) {
+    // The two candidate starts are independent solves: computed side by side.
+    let (lscm_start, mean_value_start) = rayon::join(
+        || super::lscm::solve_with_angles(chart, &super::chart_angles(&chart.positions, tris), &[]),
+        || flip_free_start(chart),
+    );
+    match lscm_start {
         Ok((uv, _)) => candidates.push((uv, "lscm")),
         Err(e) => rejected.push(format!("lscm: {}", e.0)),
     }
-    match flip_free_start(chart) {
+    match mean_value_start {
         Ok(uv) => candidates.push((uv, "mean_value")),
         Err(e) => rejected.push(format!("mean_value: {}", e.0)),
     }
