@@ -592,8 +592,11 @@ def test_abf_shared_meshes(ext, scene, mesh):
         assert abs(m.conformal - c.conformal) < 1e-3 * m.conformal, (m.conformal, c.conformal)
 
 
-def test_abf_convex_boundary_on_a_disk(ext, scene):
-    obj = shared_mesh("lion.off")
+@pytest.mark.parametrize("mesh", SHARED_MESHES + ("alligator.obj", "suzanne"))
+def test_abf_convex_boundary(ext, scene, mesh):
+    """Convex outer outline: every chart solved by ABF (no LSCM fallback), no flipped face,
+    no island whose outline crosses itself, on disks and disks with holes."""
+    obj = suzanne() if mesh == "suzanne" else shared_mesh(mesh)
     result, summary = unwrap(ext, [obj], method="abf", abf_boundary="convex")
     assert result == {"FINISHED"}, summary
     _abf_check(ext, obj, summary)
