@@ -107,10 +107,13 @@
 //! a singular or indefinite linear system, or solved angles outside (0, π). [`solve`] then
 //! falls back to plain LSCM with the 3D angles and says why in [`ChartSolution::fallback`].
 //!
-//! Preconditions: a chart that is a disk (possibly with holes). With a free boundary, holes
-//! are not constrained to close up (as in the papers): on a chart with holes the
-//! reconstruction is least squares and may flip triangles near the holes; the convex boundary
-//! closes them (above).
+//! Preconditions: a chart that is a disk (possibly with holes). Holes: with either boundary
+//! every hole is filled by a virtual fan ([`super::fixed_boundary::filled_chart`]) whose
+//! centre carries the interior constraints, so the hole's angles close up and the
+//! reconstruction of the converged angles is exact (the papers leave holes unconstrained; the
+//! least-squares layout then folds near them, e.g. on halftunnel). Only with a free boundary
+//! and a prescribed sum at a hole vertex are the holes left open, so that the prescription
+//! keeps its meaning (the sum of the chart's own angles there).
 
 use std::f64::consts::PI;
 
@@ -1110,6 +1113,8 @@ pub fn solve_angles(chart: &Chart, options: &AbfOptions) -> Result<AbfAngles, Ch
 /// the boundary angle (π keeps the boundary straight there, π/2 makes a right-angled corner).
 /// With [`AbfBoundary::Convex`], a prescribed outer vertex keeps its prescribed sum instead of
 /// the cap, and a prescribed hole vertex is refused (holes are filled; a [`ChartFailure`]).
+/// Holes are filled by virtual fans (module docs) unless, with a free boundary, a sum is
+/// prescribed at a hole vertex.
 ///
 /// Preconditions: as [`solve_angles`]; every sum in (0, 2π·valence) and finite (a sum the
 /// triangles cannot reach leaves the solve unconverged, and the caller falls back). For a
@@ -1120,43 +1125,32 @@ pub fn solve_angles_with_sums(
     options: &AbfOptions,
     prescribed: &[(u32, f64)],
 ) -> Result<AbfAngles, ChartFailure> {
-    if options.boundary == AbfBoundary::Convex && chart.boundary_loops.len() > 1 {
-        // Fill the holes with virtual fans so that they close up; solve on the filled disk,
-        // keep the chart's own triangles.
-        let outer = chart.outer_loop().expect("a chart with boundary loops");
-        for (l, lp) in chart.boundary_loops.iter().enumerate() {
-            if l == outer {
-                continue;
-            }
-            if let Some(&(v, _)) = prescribed.iter().find(|(v, _)| lp.contains(v)) {
+    let outer = chart.outer_loop();
+    let on_hole = prescribed.iter().find(|(v, _)| {
+        chart.boundary_loops.iter().enumerate().any(|(l, lp)| Some(l) != outer && lp.contains(v))
+    });
+    if chart.boundary_loops.len() > 1 {
+        match (options.boundary, on_hole) {
+            (AbfBoundary::Convex, Some(&(v, _))) => {
                 return Err(ChartFailure(format!(
                     "abf: a prescribed angle sum at hole vertex {v} cannot be combined with boundary=\"convex\" (holes are filled)"
                 )));
             }
+            // A free boundary with a prescribed hole vertex keeps its holes open (module docs).
+            (AbfBoundary::Free, Some(_)) => {}
+            // Fill the holes with virtual fans so that they close up; solve on the filled disk
+            // and keep the chart's own triangles (the first ones).
+            (_, None) => {
+                let filled = super::fixed_boundary::filled_chart(chart);
+                let nf = chart.triangles.len();
+                let mut a = solve_filled(&filled, options, prescribed)?;
+                a.alpha.truncate(nf);
+                a.beta.truncate(nf);
+                return Ok(a);
+            }
         }
-        let filled = filled_chart(chart);
-        let nf = chart.triangles.len();
-        let mut a = solve_filled(&filled, options, prescribed)?;
-        a.alpha.truncate(nf);
-        a.beta.truncate(nf);
-        return Ok(a);
     }
     solve_filled(chart, options, prescribed)
-}
-
-/// The chart with every hole (boundary loop but the outer one) filled by a virtual fan
-/// ([`super::fixed_boundary::fill_holes`]): a disk whose first triangles and vertices are the
-/// chart's. Only the fields the angle solve reads are meaningful.
-fn filled_chart(chart: &Chart) -> Chart {
-    let ext = super::fixed_boundary::fill_holes(chart);
-    let mut c = chart.clone();
-    c.mesh_vertex.resize(ext.positions.len(), u32::MAX);
-    c.triangle_face.resize(ext.triangles.len(), u32::MAX);
-    c.positions = ext.positions;
-    c.triangles = ext.triangles;
-    c.boundary_loops = vec![ext.outer];
-    c.kind = crate::unwrap::ChartKind::Disk;
-    c
 }
 
 /// [`solve_angles_with_sums`] on a chart whose holes, if any, are not to be closed.

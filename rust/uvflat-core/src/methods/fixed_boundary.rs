@@ -74,6 +74,25 @@ pub fn fill_holes(chart: &Chart) -> Extended {
     Extended { positions, triangles, outer: chart.boundary_loops[outer_i].clone() }
 }
 
+/// The chart with every hole (boundary loop but the outer one) filled by a virtual fan
+/// ([`fill_holes`]): a disk whose first triangles and vertices are the chart's, so the
+/// chart's results are the first entries of the filled chart's. Positions, triangles,
+/// boundary loops and kind describe the filled disk; the virtual vertices and triangles map
+/// to no mesh vertex or face (`u32::MAX`).
+///
+/// Preconditions: a chart with at least one boundary loop.
+pub fn filled_chart(chart: &Chart) -> Chart {
+    let ext = fill_holes(chart);
+    let mut c = chart.clone();
+    c.mesh_vertex.resize(ext.positions.len(), u32::MAX);
+    c.triangle_face.resize(ext.triangles.len(), u32::MAX);
+    c.positions = ext.positions;
+    c.triangles = ext.triangles;
+    c.boundary_loops = vec![ext.outer];
+    c.kind = crate::unwrap::ChartKind::Disk;
+    c
+}
+
 /// Number of rings of virtual vertices of [`add_virtual_band`].
 pub const VIRTUAL_RINGS: usize = 6;
 /// Ratio of the widths of consecutive rings of [`add_virtual_band`].

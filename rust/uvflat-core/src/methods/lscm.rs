@@ -186,9 +186,51 @@ pub fn solve_with_angles(
 }
 
 /// LSCM with the chart's 3D angles.
+///
+/// A chart with holes is solved with its holes open (free boundaries, as in the paper). When
+/// that map folds at all (a flipped triangle, or a boundary loop crossing itself), the chart
+/// is solved again with every hole filled by a virtual fan
+/// ([`super::fixed_boundary::filled_chart`], as Blender's own unwrapper fills holes), and the
+/// filled solution is kept when it folds less (fewer flipped triangles, then no overlap); the
+/// report's note says so.
 pub fn solve(chart: &Chart, pins: &[(u32, [f64; 2])]) -> Result<ChartSolution, ChartFailure> {
     let angles = chart_angles(&chart.positions, &chart.triangles);
     let (uv, note) = solve_with_angles(chart, &angles, pins)?;
+    if chart.boundary_loops.len() > 1 {
+        let folds = |uv: &[[f64; 2]]| {
+            let flipped = chart
+                .triangles
+                .iter()
+                .filter(|t| {
+                    let (a, b, c) = (uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]);
+                    !((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]) > 0.0)
+                })
+                .count();
+            (flipped, crate::metrics::boundary_self_overlap(uv, &chart.boundary_loops))
+        };
+        let open = folds(&uv);
+        if open != (0, false) {
+            let filled = super::fixed_boundary::filled_chart(chart);
+            let filled_angles = chart_angles(&filled.positions, &filled.triangles);
+            if let Ok((mut closed_uv, closed_note)) = solve_with_angles(&filled, &filled_angles, pins) {
+                closed_uv.truncate(chart.positions.len());
+                let closed = folds(&closed_uv);
+                if closed < open {
+                    let why = format!(
+                        "holes filled by virtual fans: with open holes the map had {} flipped triangle(s){}",
+                        open.0,
+                        if open.1 { " and a self-overlapping boundary" } else { "" }
+                    );
+                    let mut s = ChartSolution::direct(closed_uv);
+                    s.note = Some(match closed_note {
+                        Some(n) => format!("{why}; {n}"),
+                        None => why,
+                    });
+                    return Ok(s);
+                }
+            }
+        }
+    }
     let mut s = ChartSolution::direct(uv);
     s.note = note;
     Ok(s)
