@@ -107,13 +107,13 @@
 //! a singular or indefinite linear system, or solved angles outside (0, π). [`solve`] then
 //! falls back to plain LSCM with the 3D angles and says why in [`ChartSolution::fallback`].
 //!
-//! Preconditions: a chart that is a disk (possibly with holes). Holes: with either boundary
-//! every hole is filled by a virtual fan ([`super::fixed_boundary::filled_chart`]) whose
-//! centre carries the interior constraints, so the hole's angles close up and the
-//! reconstruction of the converged angles is exact (the papers leave holes unconstrained; the
-//! least-squares layout then folds near them, e.g. on halftunnel). Only with a free boundary
-//! and a prescribed sum at a hole vertex are the holes left open, so that the prescription
-//! keeps its meaning (the sum of the chart's own angles there).
+//! Preconditions: a chart that is a disk (possibly with holes). Holes with a free boundary
+//! are left open, as in the papers, and their angles are not constrained to close up, so the
+//! least-squares layout can fold near them (halftunnel). When it does (a flipped triangle or
+//! a self-crossing outline), [`solve`] solves the angles again with every hole filled by a
+//! virtual fan ([`super::fixed_boundary::filled_chart`]) whose centre carries the interior
+//! constraints, so the holes close up and the layout is exact, and keeps that map if it folds
+//! less (the note says so). A prescribed sum at a hole vertex keeps the holes open.
 
 use std::f64::consts::PI;
 
@@ -1113,8 +1113,8 @@ pub fn solve_angles(chart: &Chart, options: &AbfOptions) -> Result<AbfAngles, Ch
 /// the boundary angle (π keeps the boundary straight there, π/2 makes a right-angled corner).
 /// With [`AbfBoundary::Convex`], a prescribed outer vertex keeps its prescribed sum instead of
 /// the cap, and a prescribed hole vertex is refused (holes are filled; a [`ChartFailure`]).
-/// Holes are filled by virtual fans (module docs) unless, with a free boundary, a sum is
-/// prescribed at a hole vertex.
+/// With a free boundary the holes are left open here ([`solve`] closes them when the layout
+/// folds; module docs).
 ///
 /// Preconditions: as [`solve_angles`]; every sum in (0, 2π·valence) and finite (a sum the
 /// triangles cannot reach leaves the solve unconverged, and the caller falls back). For a
@@ -1125,32 +1125,33 @@ pub fn solve_angles_with_sums(
     options: &AbfOptions,
     prescribed: &[(u32, f64)],
 ) -> Result<AbfAngles, ChartFailure> {
-    let outer = chart.outer_loop();
-    let on_hole = prescribed.iter().find(|(v, _)| {
-        chart.boundary_loops.iter().enumerate().any(|(l, lp)| Some(l) != outer && lp.contains(v))
-    });
-    if chart.boundary_loops.len() > 1 {
-        match (options.boundary, on_hole) {
-            (AbfBoundary::Convex, Some(&(v, _))) => {
-                return Err(ChartFailure(format!(
-                    "abf: a prescribed angle sum at hole vertex {v} cannot be combined with boundary=\"convex\" (holes are filled)"
-                )));
-            }
-            // A free boundary with a prescribed hole vertex keeps its holes open (module docs).
-            (AbfBoundary::Free, Some(_)) => {}
-            // Fill the holes with virtual fans so that they close up; solve on the filled disk
-            // and keep the chart's own triangles (the first ones).
-            (_, None) => {
-                let filled = super::fixed_boundary::filled_chart(chart);
-                let nf = chart.triangles.len();
-                let mut a = solve_filled(&filled, options, prescribed)?;
-                a.alpha.truncate(nf);
-                a.beta.truncate(nf);
-                return Ok(a);
-            }
+    if options.boundary == AbfBoundary::Convex && chart.boundary_loops.len() > 1 {
+        if let Some(&(v, _)) = prescribed_on_hole(chart, prescribed) {
+            return Err(ChartFailure(format!(
+                "abf: a prescribed angle sum at hole vertex {v} cannot be combined with boundary=\"convex\" (holes are filled)"
+            )));
         }
+        return solve_angles_holes_filled(chart, options, prescribed);
     }
     solve_filled(chart, options, prescribed)
+}
+
+/// The first prescribed sum at a vertex of a hole (a boundary loop but the outer one).
+fn prescribed_on_hole<'a>(chart: &Chart, prescribed: &'a [(u32, f64)]) -> Option<&'a (u32, f64)> {
+    let outer = chart.outer_loop();
+    prescribed.iter().find(|(v, _)| chart.boundary_loops.iter().enumerate().any(|(l, lp)| Some(l) != outer && lp.contains(v)))
+}
+
+/// The angles of `chart` solved with every hole filled by a virtual fan: the fan centres
+/// carry the interior constraints, so the holes close up; the chart's own triangles (the
+/// first ones of the filled chart) are returned.
+fn solve_angles_holes_filled(chart: &Chart, options: &AbfOptions, prescribed: &[(u32, f64)]) -> Result<AbfAngles, ChartFailure> {
+    let filled = super::fixed_boundary::filled_chart(chart);
+    let nf = chart.triangles.len();
+    let mut a = solve_filled(&filled, options, prescribed)?;
+    a.alpha.truncate(nf);
+    a.beta.truncate(nf);
+    Ok(a)
 }
 
 /// [`solve_angles_with_sums`] on a chart whose holes, if any, are not to be closed.
@@ -1290,6 +1291,26 @@ pub fn solve_with_sums(
             let valid = a.alpha.iter().flatten().all(|&x| x > 0.0 && x < PI);
             if a.converged && valid {
                 let (uv, note) = lscm::solve_with_angles(chart, &a.alpha, pins)?;
+                let open_holes = options.boundary == AbfBoundary::Free && chart.boundary_loops.len() > 1;
+                let open = if open_holes { lscm::folds(chart, &uv) } else { (0, false) };
+                if open != (0, false) && prescribed_on_hole(chart, prescribed).is_none() {
+                    // The open holes folded: close them (module docs) and keep that if better.
+                    if let Ok(b) = solve_angles_holes_filled(chart, options, prescribed) {
+                        if b.converged && b.alpha.iter().flatten().all(|&x| x > 0.0 && x < PI) {
+                            let (closed_uv, closed_note) = lscm::solve_with_angles(chart, &b.alpha, pins)?;
+                            if lscm::folds(chart, &closed_uv) < open {
+                                let note = Some(lscm::holes_filled_note(open, closed_note));
+                                return Ok(ChartSolution {
+                                    uv: closed_uv,
+                                    iterations: a.iterations + b.iterations,
+                                    residual: b.residual,
+                                    note,
+                                    fallback: None,
+                                });
+                            }
+                        }
+                    }
+                }
                 return Ok(ChartSolution { uv, iterations: a.iterations, residual: a.residual, note, fallback: None });
             }
             let what = if !a.converged { "did not converge" } else { "produced an angle outside (0, π)" };

@@ -197,35 +197,15 @@ pub fn solve(chart: &Chart, pins: &[(u32, [f64; 2])]) -> Result<ChartSolution, C
     let angles = chart_angles(&chart.positions, &chart.triangles);
     let (uv, note) = solve_with_angles(chart, &angles, pins)?;
     if chart.boundary_loops.len() > 1 {
-        let folds = |uv: &[[f64; 2]]| {
-            let flipped = chart
-                .triangles
-                .iter()
-                .filter(|t| {
-                    let (a, b, c) = (uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]);
-                    !((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]) > 0.0)
-                })
-                .count();
-            (flipped, crate::metrics::boundary_self_overlap(uv, &chart.boundary_loops))
-        };
-        let open = folds(&uv);
+        let open = folds(chart, &uv);
         if open != (0, false) {
             let filled = super::fixed_boundary::filled_chart(chart);
             let filled_angles = chart_angles(&filled.positions, &filled.triangles);
             if let Ok((mut closed_uv, closed_note)) = solve_with_angles(&filled, &filled_angles, pins) {
                 closed_uv.truncate(chart.positions.len());
-                let closed = folds(&closed_uv);
-                if closed < open {
-                    let why = format!(
-                        "holes filled by virtual fans: with open holes the map had {} flipped triangle(s){}",
-                        open.0,
-                        if open.1 { " and a self-overlapping boundary" } else { "" }
-                    );
+                if folds(chart, &closed_uv) < open {
                     let mut s = ChartSolution::direct(closed_uv);
-                    s.note = Some(match closed_note {
-                        Some(n) => format!("{why}; {n}"),
-                        None => why,
-                    });
+                    s.note = Some(holes_filled_note(open, closed_note));
                     return Ok(s);
                 }
             }
@@ -234,6 +214,34 @@ pub fn solve(chart: &Chart, pins: &[(u32, [f64; 2])]) -> Result<ChartSolution, C
     let mut s = ChartSolution::direct(uv);
     s.note = note;
     Ok(s)
+}
+
+/// How much a map of `chart` folds: its flipped or degenerate triangles, and whether a
+/// boundary loop crosses itself or another. Ordered: fewer flips first, then no overlap.
+pub(crate) fn folds(chart: &Chart, uv: &[[f64; 2]]) -> (usize, bool) {
+    let flipped = chart
+        .triangles
+        .iter()
+        .filter(|t| {
+            let (a, b, c) = (uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]);
+            !((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]) > 0.0)
+        })
+        .count();
+    (flipped, crate::metrics::boundary_self_overlap(uv, &chart.boundary_loops))
+}
+
+/// The report note of a chart re-solved with its holes filled, after the open-hole map
+/// folded as `open` (see [`folds`]); `then` is the note of the filled solve, if any.
+pub(crate) fn holes_filled_note(open: (usize, bool), then: Option<String>) -> String {
+    let why = format!(
+        "holes filled by virtual fans: with open holes the map had {} flipped triangle(s){}",
+        open.0,
+        if open.1 { " and a self-overlapping boundary" } else { "" }
+    );
+    match then {
+        Some(n) => format!("{why}; {n}"),
+        None => why,
+    }
 }
 
 #[cfg(test)]
