@@ -156,8 +156,13 @@ fn scaffold_keeps_a_chart_whose_isometric_flattening_overlaps_bijective() {
         }
     }
     let ch = disk_charts(&s, &seams).pop().unwrap();
-    let (_, h) = uvflat_core::methods::scaffold::solve_with_history(&ch, &[], &Default::default()).unwrap();
+    let (sol, h) = uvflat_core::methods::scaffold::solve_with_history(&ch, &[], &Default::default()).unwrap();
     assert_non_increasing("wavy cone", &h.energy);
+    // The report gives the iterations run and the final energy of the history.
+    assert_eq!(sol.iterations + 1, h.energy.len());
+    let note = sol.note.expect("scaffold reports its energy");
+    let want = format!("symmetric Dirichlet {:.6} after {} iteration(s)", h.energy.last().unwrap(), sol.iterations);
+    assert!(note.starts_with(&want), "{note:?} vs {want:?}");
 }
 
 #[test]

@@ -811,10 +811,12 @@ fn run(
     sol.iterations = iterations;
     sol.residual = change;
     let pin_note = honour_pins_by_similarity(&mut sol.uv, pins, "scaffold");
-    sol.note = match (stop_note, pin_note) {
-        (Some(a), Some(b)) => Some(format!("{a}; {b}")),
-        (a, b) => a.or(b),
-    };
+    let remeshes = history.remeshed.iter().filter(|&&r| r).count();
+    let summary = format!(
+        "symmetric Dirichlet {energy:.6} after {iterations} iteration(s), started from {}; scaffold re-meshed {remeshes} time(s), {} symbolic analysis(es)",
+        history.start, history.analyses
+    );
+    sol.note = Some([Some(summary), stop_note, pin_note].into_iter().flatten().collect::<Vec<_>>().join("; "));
     Ok((sol, history))
 }
 #[cfg(test)]
