@@ -270,26 +270,14 @@ fn chart_energy(rest: &[RestTriangle], area: &[f64], total: f64, tris: &[[u32; 3
 }
 
 /// Scale `uv` about the origin by the factor minimising the chart's symmetric Dirichlet energy
-/// (`E(s) = s² P + s⁻² Q`, optimal `s = (Q/P)^{1/4}`); no-op on a map with a degenerate
-/// triangle.
+/// ([`super::slim::optimal_scale`]); no-op on a map with a degenerate triangle.
 fn scale_optimally(rest: &[RestTriangle], tris: &[[u32; 3]], uv: &mut [[f64; 2]]) {
-    let (p, q) = rest
-        .par_iter()
-        .zip(tris.par_iter())
-        .with_min_len(2048)
-        .map(|(r, t)| {
-            let j = r.jacobian([uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]]);
-            let det = j[0] * j[3] - j[1] * j[2];
-            let fro = j.iter().map(|x| x * x).sum::<f64>();
-            (r.area * fro, r.area * fro / (det * det))
-        })
-        .reduce(|| (0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
-    let s = (q / p).sqrt().sqrt();
-    if s.is_finite() && s > 0.0 {
-        for x in uv.iter_mut() {
-            *x = [s * x[0], s * x[1]];
-        }
-    }
+    let s = super::slim::optimal_scale(tris.len(), |f| {
+        let t = tris[f];
+        let j = rest[f].jacobian([uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]]);
+        (rest[f].area, [[j[0], j[1]], [j[2], j[3]]])
+    });
+    super::slim::scale_uv(uv, s);
 }
 
 /// The (p, q), p ≥ q, entries of a triangle's 6 × 6 block over the unknowns
@@ -487,21 +475,7 @@ fn pick_start(
     total: f64,
 ) -> Result<(Option<(Vec<[f64; 2]>, f64, &'static str)>, Vec<String>), ChartFailure> {
     let tris = &chart.triangles;
-    let mut candidates: Vec<(Vec<[f64; 2]>, &'static str)> = Vec::new();
-    let mut rejected = Vec::new();
-    // The two candidate starts are independent solves: computed side by side.
-    let (lscm_start, mean_value_start) = rayon::join(
-        || super::lscm::solve_with_angles(chart, &super::chart_angles(&chart.positions, tris), &[]),
-        || flip_free_start(chart),
-    );
-    match lscm_start {
-        Ok((uv, _)) => candidates.push((uv, "lscm")),
-        Err(e) => rejected.push(format!("lscm: {}", e.0)),
-    }
-    match mean_value_start {
-        Ok(uv) => candidates.push((uv, "mean_value")),
-        Err(e) => rejected.push(format!("mean_value: {}", e.0)),
-    }
+    let (candidates, mut rejected) = super::slim::candidate_starts(chart, &[], true);
     let mut best: Option<(Vec<[f64; 2]>, f64, &'static str)> = None;
     for (mut uv, name) in candidates {
         scale_optimally(rest, tris, &mut uv);

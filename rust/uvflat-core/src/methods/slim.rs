@@ -132,23 +132,65 @@ pub(crate) fn density(j: [[f64; 2]; 2]) -> f64 {
 /// Scale `uv` about the origin by the factor minimising the symmetric Dirichlet energy
 /// (`E(s) = s² P + s⁻² Q`, optimal `s = (Q/P)^{1/4}`). No-op for an invalid map.
 fn scale_optimally(ops: &TriangleOperators, triangles: &[[u32; 3]], uv: &mut [[f64; 2]]) {
-    let (p, q) = triangles
-        .par_iter()
-        .enumerate()
+    let s = optimal_scale(triangles.len(), |f| (ops.area[f], ops.jacobian(f, &triangles[f], uv)));
+    scale_uv(uv, s);
+}
+
+/// The factor `s = (Q/P)^{1/4}` minimising `E(s) = s² P + s⁻² Q`, `P = Σ A ‖J‖²`,
+/// `Q = Σ A ‖J‖²/det² = Σ A ‖J⁻¹‖²`, over `n` triangles given as `(area, J)` by
+/// `area_and_jacobian`: the best uniform scale of a map for the symmetric Dirichlet energy.
+/// Shared with the scaffold method. Not finite for a map with a degenerate triangle.
+pub(crate) fn optimal_scale(n: usize, area_and_jacobian: impl Fn(usize) -> (f64, [[f64; 2]; 2]) + Sync) -> f64 {
+    let (p, q) = (0..n)
+        .into_par_iter()
         .with_min_len(2048)
-        .map(|(f, t)| {
-            let j = ops.jacobian(f, t, uv);
+        .map(|f| {
+            let (a, j) = area_and_jacobian(f);
             let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
             let fro = j[0][0] * j[0][0] + j[0][1] * j[0][1] + j[1][0] * j[1][0] + j[1][1] * j[1][1];
-            (ops.area[f] * fro, ops.area[f] * fro / (det * det))
+            (a * fro, a * fro / (det * det))
         })
         .reduce(|| (0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
-    let s = (q / p).sqrt().sqrt();
+    (q / p).sqrt().sqrt()
+}
+
+/// Multiply every UV by `s` (no-op unless `s` is finite and positive).
+pub(crate) fn scale_uv(uv: &mut [[f64; 2]], s: f64) {
     if s.is_finite() && s > 0.0 {
         for x in uv.iter_mut() {
             *x = [s * x[0], s * x[1]];
         }
     }
+}
+
+/// The two candidate starting maps of SLIM and scaffold, computed side by side (independent
+/// solves): LSCM (if `with_lscm`) and the mean value map on a circle, both honouring
+/// `start_pins`. Returns the maps that could be computed, by name, and why the others could not.
+pub(crate) fn candidate_starts(
+    chart: &Chart,
+    start_pins: &[(u32, [f64; 2])],
+    with_lscm: bool,
+) -> (Vec<(Vec<[f64; 2]>, &'static str)>, Vec<String>) {
+    let (lscm_start, mean_value_start) = rayon::join(
+        || {
+            with_lscm.then(|| {
+                let angles = chart_angles(&chart.positions, &chart.triangles);
+                lscm::solve_with_angles(chart, &angles, start_pins)
+            })
+        },
+        || fixed_boundary::solve(chart, start_pins, BoundaryShape::Circle, Weights::MeanValue),
+    );
+    let (mut candidates, mut rejected) = (Vec::new(), Vec::new());
+    match lscm_start {
+        Some(Ok((uv, _))) => candidates.push((uv, "lscm")),
+        Some(Err(e)) => rejected.push(format!("lscm: {}", e.0)),
+        None => {}
+    }
+    match mean_value_start {
+        Ok(s) => candidates.push((s.uv, "mean_value")),
+        Err(e) => rejected.push(format!("mean_value: {}", e.0)),
+    }
+    (candidates, rejected)
 }
 
 /// Per-triangle local step: `W²` (symmetric, as `[m00, m01, m11]`) and `W² R` (row-major).
@@ -188,27 +230,7 @@ fn pick_start(
     let tris = &chart.triangles;
     let spanning = lscm::pins_span(pins);
     let start_pins: &[(u32, [f64; 2])] = if spanning { pins } else { &[] };
-    let mut candidates: Vec<(Vec<[f64; 2]>, &'static str)> = Vec::new();
-    let mut rejected = Vec::new();
-    // The two candidate starts are independent solves: computed side by side.
-    let (lscm_start, mean_value_start) = rayon::join(
-        || {
-            (options.start == SlimStart::Auto).then(|| {
-                let angles = chart_angles(&chart.positions, tris);
-                lscm::solve_with_angles(chart, &angles, start_pins)
-            })
-        },
-        || fixed_boundary::solve(chart, start_pins, BoundaryShape::Circle, Weights::MeanValue),
-    );
-    match lscm_start {
-        Some(Ok((uv, _))) => candidates.push((uv, "lscm")),
-        Some(Err(e)) => rejected.push(format!("lscm: {}", e.0)),
-        None => {}
-    }
-    match mean_value_start {
-        Ok(s) => candidates.push((s.uv, "mean_value")),
-        Err(e) => rejected.push(format!("mean_value: {}", e.0)),
-    }
+    let (candidates, mut rejected) = candidate_starts(chart, start_pins, options.start == SlimStart::Auto);
     let mut best: Option<Start> = None;
     for (mut uv, name) in candidates {
         if !spanning {
