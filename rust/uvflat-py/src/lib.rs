@@ -41,6 +41,20 @@ struct Soup {
     face_sizes: Vec<u32>,
 }
 
+impl Soup {
+    /// The core's view of this soup with the given seams, selection and pins.
+    fn input<'a>(&'a self, seams: &'a [[u32; 2]], selected: Option<&'a [bool]>, pins: &'a [(u32, [f64; 2])]) -> MeshInput<'a> {
+        MeshInput {
+            positions: &self.positions,
+            corner_verts: &self.corner_verts,
+            face_sizes: &self.face_sizes,
+            seams,
+            selected,
+            pins,
+        }
+    }
+}
+
 fn read_soup(
     positions: &Bound<'_, PyAny>,
     corner_verts: &Bound<'_, PyAny>,
@@ -202,15 +216,7 @@ fn factorization_seconds(
     let seams = read_seams(py, seams, soup.positions.len())?;
     let selected = read_selected(selected)?;
     run_core(py, "fit_to", || {
-        let input = MeshInput {
-            positions: &soup.positions,
-            corner_verts: &soup.corner_verts,
-            face_sizes: &soup.face_sizes,
-            seams: &seams,
-            selected: selected.as_deref(),
-            pins: &[],
-        };
-        uvflat_core::factorization_seconds(&input, &method)
+        uvflat_core::factorization_seconds(&soup.input(&seams, selected.as_deref(), &[]), &method)
     })
 }
 
@@ -279,15 +285,7 @@ fn unwrap(
     let unwrap_options = UnwrapOptions { method, fit };
     let (result, seconds) = run_core(py, "fit_to", || {
         let start = Instant::now();
-        let input = MeshInput {
-            positions: &soup.positions,
-            corner_verts: &soup.corner_verts,
-            face_sizes: &soup.face_sizes,
-            seams: &seams,
-            selected: selected.as_deref(),
-            pins: &pins,
-        };
-        let r = uvflat_core::unwrap(&input, &unwrap_options)?;
+        let r = uvflat_core::unwrap(&soup.input(&seams, selected.as_deref(), &pins), &unwrap_options)?;
         Ok((r, start.elapsed().as_secs_f64()))
     })?;
 
