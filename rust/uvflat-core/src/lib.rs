@@ -14,6 +14,7 @@
 //! See `ARCHITECTURE.md` at the repository root for the module graph.
 
 pub mod charts;
+pub mod cuts;
 pub mod error;
 mod factor_timing;
 pub mod geometry;
@@ -23,6 +24,7 @@ pub mod metrics;
 pub mod solvers;
 mod unwrap;
 
+pub use cuts::AutoSeamOptions;
 pub use error::{Result, UvError};
 pub use factor_timing::factorization_seconds;
 pub use methods::{method_names, BoundaryShape, Method, OptionValue, SpectralOptions};

@@ -3,6 +3,7 @@
 use rayon::prelude::*;
 
 use crate::charts::{build_charts, Chart};
+use crate::cuts::{self, AutoSeamOptions};
 use crate::error::{Result, UvError};
 use crate::mesh::PolyMesh;
 use crate::methods::{self, ChartFailure, Method};
@@ -47,6 +48,8 @@ pub struct UnwrapOptions {
     pub method: Method,
     /// Placement of the solved charts. Default: [`Fit::AreaScaled`].
     pub fit: Fit,
+    /// Automatic seams for closed and higher-genus charts (see [`crate::cuts`]). Default: on.
+    pub auto_seams: AutoSeamOptions,
 }
 
 /// Topological class of a chart, from its Euler characteristic and boundary loops.
@@ -131,6 +134,10 @@ pub struct ChartReport {
     pub distortion: Distortion,
     /// Wall-clock seconds spent mapping this chart.
     pub seconds: f64,
+    /// Cone singularities placed by automatic seams in this chart (0 when it was not cut).
+    pub cones: usize,
+    /// Total 3D length of the automatic seams made for this chart (0 when it was not cut).
+    pub cut_length: f64,
 }
 
 /// Result of [`unwrap`].
@@ -143,6 +150,8 @@ pub struct Unwrapped {
     pub face_chart: Vec<i32>,
     /// One report per chart, indexed by chart id.
     pub charts: Vec<ChartReport>,
+    /// Seams added by automatic seams, as mesh vertex pairs `[a, b]` with `a < b`, sorted.
+    pub new_seams: Vec<[u32; 2]>,
 }
 
 impl Unwrapped {
@@ -192,6 +201,7 @@ pub fn unwrap(input: &MeshInput<'_>, options: &UnwrapOptions) -> Result<Unwrappe
         }
     }
     options.method.validate()?;
+    options.auto_seams.validate(input.positions.len())?;
     if let crate::methods::Method::Abf(o) = &options.method {
         if !o.angle_sums.is_empty() {
             let mut corners = vec![0u32; input.positions.len()];
@@ -211,27 +221,47 @@ pub fn unwrap(input: &MeshInput<'_>, options: &UnwrapOptions) -> Result<Unwrappe
         pin_of_corner[c as usize] = Some(uv);
     }
 
-    let solved: Vec<(ChartReport, Option<Vec<[f64; 2]>>)> = charts
+    let mut avoid = vec![false; input.positions.len()];
+    for &v in &options.auto_seams.avoid_vertices {
+        avoid[v as usize] = true;
+    }
+    let ctx = Context { mesh: &mesh, pins: &pin_of_corner, options, avoid: &avoid };
+    let pieces: Vec<Vec<Piece>> = charts
         .par_iter()
-        .enumerate()
-        .map(|(id, chart)| solve_chart(id, chart, &pin_of_corner, options))
+        .map(|chart| {
+            if options.auto_seams.enabled && cuts::needs_cut(chart) {
+                auto_cut(&ctx, chart, input.seams, 0)
+            } else {
+                let (report, uv) = solve_chart(0, chart, &pin_of_corner, options);
+                vec![Piece { chart: None, report, uv, seams: Vec::new() }]
+            }
+        })
         .collect();
 
     let mut uv = vec![[0.0, 0.0]; n_corners];
     let mut face_chart = vec![-1i32; mesh.n_faces()];
     let mut reports = Vec::with_capacity(charts.len());
-    for (chart, (report, vuv)) in charts.iter().zip(solved) {
-        for &f in &chart.faces {
-            face_chart[f as usize] = report.id as i32;
-        }
-        if let Some(vuv) = vuv {
-            for &(c, v) in chart.corner_vertex.iter() {
-                uv[c as usize] = vuv[v as usize];
+    let mut new_seams = Vec::new();
+    for (original, list) in charts.iter().zip(pieces) {
+        for piece in list {
+            let chart = piece.chart.as_ref().unwrap_or(original);
+            let mut report = piece.report;
+            report.id = reports.len();
+            for &f in &chart.faces {
+                face_chart[f as usize] = report.id as i32;
             }
+            if let Some(vuv) = piece.uv {
+                for &(c, v) in chart.corner_vertex.iter() {
+                    uv[c as usize] = vuv[v as usize];
+                }
+            }
+            new_seams.extend(piece.seams);
+            reports.push(report);
         }
-        reports.push(report);
     }
-    Ok(Unwrapped { uv, face_chart, charts: reports })
+    new_seams.sort_unstable();
+    new_seams.dedup();
+    Ok(Unwrapped { uv, face_chart, charts: reports, new_seams })
 }
 
 fn solve_chart(
@@ -258,6 +288,8 @@ fn solve_chart(
         overlap: false,
         distortion: Distortion::nan(),
         seconds: 0.0,
+        cones: 0,
+        cut_length: 0.0,
     };
     // Pins per chart vertex (average when corners of one vertex disagree).
     let pins = chart.vertex_pins(pin_of_corner);
@@ -312,4 +344,169 @@ fn place_chart(chart: &Chart, uv: &mut [[f64; 2]], fit: &Fit) {
             }
         }
     }
+}
+
+/// One solved chart of the output: an input chart as built, or a piece of it made by
+/// automatic seams.
+struct Piece {
+    /// The rebuilt chart, or `None` for the input chart itself.
+    chart: Option<Chart>,
+    report: ChartReport,
+    uv: Option<Vec<[f64; 2]>>,
+    /// Seams added for this piece (mesh vertex pairs).
+    seams: Vec<[u32; 2]>,
+}
+
+/// What automatic cutting needs from the unwrap.
+struct Context<'a, 'm> {
+    mesh: &'a PolyMesh<'m>,
+    pins: &'a [Option<[f64; 2]>],
+    options: &'a UnwrapOptions,
+    avoid: &'a [bool],
+}
+
+/// Whether a solved piece is good enough to stop repairing: mapped, no flips, an outline that
+/// does not cross itself, and area distortion within `max_stretch`.
+fn piece_valid(report: &ChartReport, max_stretch: f64) -> bool {
+    report.status != ChartStatus::Failed && report.flips == 0 && !report.overlap && report.distortion.area <= max_stretch
+}
+
+/// How bad a set of pieces is (lower is better): failures, overlaps, flips, then area excess.
+fn badness(pieces: &[Piece], max_stretch: f64) -> (usize, usize, usize, usize) {
+    let failed = pieces.iter().filter(|p| p.report.status == ChartStatus::Failed).count();
+    let overlaps = pieces.iter().filter(|p| p.report.overlap).count();
+    let flips = pieces.iter().map(|p| p.report.flips).sum();
+    let stretched = pieces.iter().filter(|p| !(p.report.distortion.area <= max_stretch)).count();
+    (failed, overlaps, flips, stretched)
+}
+
+/// Faces of `chart` as a selection mask over the mesh.
+fn face_mask(n_faces: usize, chart: &Chart) -> Vec<bool> {
+    let mut mask = vec![false; n_faces];
+    for &f in &chart.faces {
+        mask[f as usize] = true;
+    }
+    mask
+}
+
+/// The chart vertex of `chart` whose neighbourhood is worst in `uv` of `piece`: a vertex of
+/// a flipped triangle, else of the triangle of largest area distortion; mapped back to a
+/// vertex of `original` through the shared corners.
+fn worst_vertex(original: &Chart, piece: &Chart, uv: &[[f64; 2]]) -> Option<u32> {
+    let tris = &piece.triangles;
+    if tris.is_empty() {
+        return None;
+    }
+    let area3: f64 = tris.iter().map(|t| tri_area3(piece, t)).sum();
+    let area2: f64 = tris.iter().map(|t| tri_area2(uv, t)).sum::<f64>();
+    let sign = if area2 < 0.0 { -1.0 } else { 1.0 };
+    let scale = if area2.abs() > 0.0 { area3 / area2.abs() } else { 1.0 };
+    let mut worst = (f64::NEG_INFINITY, 0usize);
+    for (i, t) in tris.iter().enumerate() {
+        let a2 = sign * tri_area2(uv, t) * scale;
+        let a3 = tri_area3(piece, t);
+        let badness = if a2 <= 0.0 { f64::INFINITY } else { (a2 / a3.max(1e-300)).ln().abs() };
+        if badness > worst.0 {
+            worst = (badness, i);
+        }
+    }
+    let boundary = piece.boundary_mask();
+    let t = tris[worst.1];
+    // Prefer a vertex inside the piece (a cone on the cut is fine too).
+    let v = t.iter().copied().find(|&v| !boundary[v as usize]).unwrap_or(t[0]);
+    let corner = piece.corner_vertex.iter().find(|&&(_, pv)| pv == v)?.0;
+    original.corner_vertex.iter().find(|&&(c, _)| c == corner).map(|&(_, ov)| ov)
+}
+
+fn tri_area3(chart: &Chart, t: &[u32; 3]) -> f64 {
+    let p = |k: usize| chart.positions[t[k] as usize];
+    crate::geometry::triangle_area([p(0), p(1), p(2)])
+}
+
+fn tri_area2(uv: &[[f64; 2]], t: &[u32; 3]) -> f64 {
+    crate::geometry::signed_area_2d([uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]])
+}
+
+/// Cut a closed or higher-genus chart into disks and solve them: cones and a cut graph, then
+/// repair rounds (one more cone at the worst vertex while a piece flips or overlaps), then,
+/// while still invalid and `depth < MAX_SPLIT_DEPTH`, halve the chart and start again on each
+/// half. Never fails: the last attempt is returned with its honest report.
+fn auto_cut(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], depth: usize) -> Vec<Piece> {
+    let mask = face_mask(ctx.mesh.n_faces(), chart);
+    let max_stretch = ctx.options.auto_seams.max_stretch;
+    let mut seed: Vec<u32> = Vec::new();
+    let mut last: Vec<Piece> = Vec::new();
+    for round in 0..=cuts::REPAIR_ROUNDS {
+        let cut = cuts::cut_chart(ctx.mesh, chart, &ctx.options.auto_seams, ctx.avoid, &seed, round);
+        let mut all: Vec<[u32; 2]> = base_seams.to_vec();
+        all.extend_from_slice(&cut.seams);
+        let sub = build_charts(ctx.mesh, &all, Some(&mask));
+        let mut pieces: Vec<Piece> = Vec::with_capacity(sub.len());
+        let mut first = true;
+        for c in sub {
+            // A piece the cut did not open (it should not happen) fails in the solve with
+            // its reason and is then repaired or split like any invalid piece.
+            let (mut report, uv) = solve_chart(0, &c, ctx.pins, ctx.options);
+            report.cones = if first { cut.cones.len() } else { 0 };
+            report.cut_length = if first { cut.length } else { 0.0 };
+            let seams = if first { cut.seams.clone() } else { Vec::new() };
+            first = false;
+            pieces.push(Piece { chart: Some(c), report, uv, seams });
+        }
+        let valid = pieces.iter().all(|p| piece_valid(&p.report, max_stretch));
+        let next = pieces
+            .iter()
+            .find(|p| !piece_valid(&p.report, max_stretch))
+            .and_then(|p| worst_vertex(chart, p.chart.as_ref()?, p.uv.as_ref()?));
+        last = pieces;
+        if valid {
+            break;
+        }
+        match next {
+            Some(v) if !seed.contains(&v) && !cut.cones.contains(&v) && !ctx.avoid[chart.mesh_vertex[v as usize] as usize] => {
+                seed = cut.cones.clone();
+                seed.push(v);
+            }
+            _ => break,
+        }
+    }
+    let valid = last.iter().all(|p| piece_valid(&p.report, max_stretch));
+    if !valid && depth < cuts::MAX_SPLIT_DEPTH && chart.faces.len() >= 2 {
+        let graph = cuts::ChartGraph::new(ctx.mesh, chart);
+        let split = cuts::split::halve(&graph, chart, ctx.avoid);
+        if !split.is_empty() {
+            let mut all: Vec<[u32; 2]> = base_seams.to_vec();
+            all.extend_from_slice(&split);
+            let halves = build_charts(ctx.mesh, &all, Some(&mask));
+            let mut out = Vec::new();
+            let mut first = true;
+            for h in halves {
+                // Each half is cut again (cones, holes joined to its outline) as needed.
+                let mut list = if h.defect.is_none() {
+                    auto_cut(ctx, &h, &all, depth + 1)
+                } else {
+                    let (report, uv) = solve_chart(0, &h, ctx.pins, ctx.options);
+                    vec![Piece { chart: Some(h), report, uv, seams: Vec::new() }]
+                };
+                if first {
+                    if let Some(p) = list.first_mut() {
+                        p.seams.extend_from_slice(&split);
+                        p.report.cut_length += split_length(ctx.mesh, &split);
+                    }
+                    first = false;
+                }
+                out.extend(list);
+            }
+            if badness(&out, max_stretch) < badness(&last, max_stretch) {
+                return out;
+            }
+        }
+    }
+    last
+}
+
+/// 3D length of mesh edges given as vertex pairs.
+fn split_length(mesh: &PolyMesh<'_>, seams: &[[u32; 2]]) -> f64 {
+    let p = mesh.positions();
+    seams.iter().map(|s| crate::geometry::norm(crate::geometry::sub(p[s[1] as usize], p[s[0] as usize]))).sum()
 }

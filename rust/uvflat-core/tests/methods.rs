@@ -184,11 +184,19 @@ fn closed_and_degenerate_inputs_fail_per_chart_or_get_finite_uvs() {
     let cv = vec![0, 2, 1, 0, 1, 3, 1, 2, 3, 0, 3, 2];
     let fs = vec![3u32; 4];
     let s = Soup { positions: p, corner_verts: cv, face_sizes: fs };
-    let r = unwrap(&s.input(), &opts(Method::Lscm)).unwrap();
+    let no_cuts = UnwrapOptions {
+        auto_seams: uvflat_core::AutoSeamOptions { enabled: false, ..Default::default() },
+        ..opts(Method::Lscm)
+    };
+    let r = unwrap(&s.input(), &no_cuts).unwrap();
     assert_eq!(r.charts[0].status, ChartStatus::Failed);
     assert_eq!(r.charts[0].kind, ChartKind::Closed);
     assert!(r.charts[0].reason.as_ref().unwrap().contains("seam"));
     assert!(!r.face_solved(0));
+    // With automatic seams (the default) the tetrahedron is cut open and every face solved.
+    let r = unwrap(&s.input(), &opts(Method::Lscm)).unwrap();
+    assert!((0..4).all(|f| r.face_solved(f)), "{:?}", r.charts);
+    assert!(!r.new_seams.is_empty());
     // Zero-area faces (all points on a line, and one fully collapsed) get finite UVs.
     let p = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0], [1.0, 1.0, 0.0], [1.0, 0.0, 0.0]];
     let s = Soup { positions: p, corner_verts: vec![0, 1, 3, 1, 2, 3, 0, 2, 1], face_sizes: vec![3, 3, 3] };

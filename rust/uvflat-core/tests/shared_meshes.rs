@@ -37,7 +37,8 @@ fn run(method: Method, check: impl Fn(&str, &uvflat_core::ChartReport)) {
         for c in &r.charts {
             match c.kind {
                 ChartKind::Closed | ChartKind::HigherGenus => {
-                    assert_eq!(c.status, ChartStatus::Failed, "{f}: chart {} is {:?}", c.id, c.kind);
+                    // Automatic seams cut every such chart unless it has a defect.
+                    assert_eq!(c.status, ChartStatus::Failed, "{f}: chart {} is {:?} and was not cut", c.id, c.kind);
                     assert!(c.reason.as_deref().unwrap_or("").contains("seam"), "{f}: {:?}", c.reason);
                 }
                 _ => {}

@@ -331,10 +331,10 @@ pub fn require_disk(chart: &Chart) -> std::result::Result<(), ChartFailure> {
     match chart.kind {
         ChartKind::Disk | ChartKind::DiskWithHoles => Ok(()),
         ChartKind::Closed => Err(ChartFailure(
-            "closed surface without boundary: mark at least one seam to open it (automatic cutting is not available yet)".into(),
+            "closed surface without boundary: mark at least one seam to open it, or turn on automatic seams".into(),
         )),
         ChartKind::HigherGenus => Err(ChartFailure(format!(
-            "surface of genus {}: mark seams that cut through every handle (automatic cutting is not available yet)",
+            "surface of genus {}: mark seams that cut through every handle, or turn on automatic seams",
             chart.genus
         ))),
     }

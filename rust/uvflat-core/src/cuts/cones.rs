@@ -1,0 +1,241 @@
+//! Greedy cone placement on the linearised conformal scale factor.
+//!
+//! Paper: Springborn, Schröder, Pinkall 2008 (CETM) §5.1 and Ben-Chen, Gotsman, Bunin 2008
+//! (conformal flattening by curvature prescription): with cone vertices `C` (and the chart's
+//! boundary, if any) held at `u = 0`, the log scale factor `u` of the conformal metric that is
+//! flat away from the cones solves the discrete Yamabe equation
+//!
+//! ```text
+//! (L u)_i = −K_i   at every other vertex,
+//! ```
+//!
+//! `L` the cotangent Laplacian (positive semi-definite, weights ½(cot α + cot β)) and `K_i`
+//! the angle defect (2π − Σ angles). Lengths scale by `e^u`, so `max |u| ≤ ln(max_stretch)`
+//! bounds the stretch of the flattening. A new cone goes where `|u|` is largest; a few passes
+//! then move each cone to where `|u|` peaks without it. The curvature each cone ends up with
+//! is `K̂_c = K_c + (L u)_c`; the cone curvatures (with the boundary's) add up to 2πχ.
+//!
+//! Linear algebra: the Dirichlet vertices are held by a large diagonal penalty so the sparsity
+//! pattern never changes: one symbolic Cholesky analysis per chart, one numeric refactor per
+//! cone set.
+//!
+//! Preconditions: a chart without defects. Degenerate triangles are safe: cotangents come
+//! from clamped angles (every triangle contributes the stiffness of a valid triangle, so `L`
+//! stays positive semi-definite) and `1e-8 · mean diagonal` is added to the diagonal.
+//!
+//! Failures: none; if the factorization fails (it should not), the cones found so far are
+//! returned with `u` zero.
+
+use std::f64::consts::PI;
+
+use faer::linalg::solvers::Solve;
+use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
+use faer::sparse::{Pair, SparseColMat, SymbolicSparseColMat};
+use faer::{Mat, Side};
+
+use crate::charts::Chart;
+use crate::geometry::clamped_angles;
+
+/// Result of [`place_cones`].
+#[derive(Debug, Clone)]
+pub struct Cones {
+    /// Cone vertices (chart vertex ids), in the order they were placed.
+    pub vertices: Vec<u32>,
+    /// Curvature `K̂` concentrated at each cone (radians; the cone angle is 2π − K̂).
+    pub curvature: Vec<f64>,
+    /// Log scale factor per chart vertex with these cones.
+    pub u: Vec<f64>,
+    /// Largest `|u|` over the chart.
+    pub max_u: f64,
+}
+
+/// The Laplace system of one chart, analysed once.
+pub struct ScaleSolver {
+    n: usize,
+    /// Lower-triangle values of `L` in pattern order (before penalty).
+    base: Vec<f64>,
+    /// Position of each vertex's diagonal in `base`.
+    diag: Vec<usize>,
+    /// `(row, col, value)` of `L` (lower triangle incl. diagonal), to compute `L u`.
+    entries: Vec<(u32, u32, f64)>,
+    symbolic: SymbolicSparseColMat<usize>,
+    argsort: faer::sparse::Argsort<usize>,
+    llt: SymbolicLlt<usize>,
+    penalty: f64,
+    /// Angle defect per vertex.
+    pub defect: Vec<f64>,
+    /// Whether each vertex is on the chart's boundary.
+    pub boundary: Vec<bool>,
+}
+
+impl ScaleSolver {
+    /// Assemble the cotangent Laplacian and curvature of `chart` and analyse the pattern.
+    pub fn new(chart: &Chart) -> Option<ScaleSolver> {
+        let n = chart.positions.len();
+        let mut sums = vec![0.0f64; n];
+        let mut map: std::collections::HashMap<(u32, u32), f64> = std::collections::HashMap::new();
+        for t in &chart.triangles {
+            let p = [chart.positions[t[0] as usize], chart.positions[t[1] as usize], chart.positions[t[2] as usize]];
+            let a = clamped_angles(p);
+            for k in 0..3 {
+                sums[t[k] as usize] += a[k];
+                let (i, j) = (t[(k + 1) % 3], t[(k + 2) % 3]);
+                let w = 0.5 / a[k].tan();
+                let key = (i.max(j), i.min(j));
+                *map.entry(key).or_insert(0.0) -= w;
+                *map.entry((i, i)).or_insert(0.0) += w;
+                *map.entry((j, j)).or_insert(0.0) += w;
+            }
+        }
+        let boundary = chart.boundary_mask();
+        let defect: Vec<f64> =
+            (0..n).map(|v| if boundary[v] { PI - sums[v] } else { 2.0 * PI - sums[v] }).collect();
+        for v in 0..n as u32 {
+            map.entry((v, v)).or_insert(0.0);
+        }
+        let mut entries: Vec<(u32, u32, f64)> = map.into_iter().map(|((r, c), w)| (r, c, w)).collect();
+        entries.sort_unstable_by_key(|e| (e.1, e.0));
+        let mean_diag = entries.iter().filter(|e| e.0 == e.1).map(|e| e.2.abs()).sum::<f64>() / n.max(1) as f64;
+        let max_diag = entries.iter().filter(|e| e.0 == e.1).map(|e| e.2.abs()).fold(0.0, f64::max);
+        let eps = 1e-8 * mean_diag.max(1e-300);
+        let pairs: Vec<Pair<usize, usize>> = entries.iter().map(|e| Pair { row: e.0 as usize, col: e.1 as usize }).collect();
+        let (symbolic, argsort) = SymbolicSparseColMat::try_new_from_indices(n, n, &pairs).ok()?;
+        let llt = SymbolicLlt::try_new(symbolic.as_ref(), Side::Lower).ok()?;
+        let mut diag = vec![0usize; n];
+        let mut base = Vec::with_capacity(entries.len());
+        for (k, e) in entries.iter().enumerate() {
+            if e.0 == e.1 {
+                diag[e.0 as usize] = k;
+                base.push(e.2 + eps);
+            } else {
+                base.push(e.2);
+            }
+        }
+        Some(ScaleSolver { n, base, diag, entries, symbolic, argsort, llt, penalty: 1e8 * max_diag.max(1e-300), defect, boundary })
+    }
+
+    /// Solve for `u` with `fixed` vertices (and the boundary) held at zero.
+    pub fn solve(&self, fixed: &[u32]) -> Option<Vec<f64>> {
+        let mut values = self.base.clone();
+        let mut held = self.boundary.clone();
+        for &c in fixed {
+            held[c as usize] = true;
+        }
+        for v in 0..self.n {
+            if held[v] {
+                values[self.diag[v]] += self.penalty;
+            }
+        }
+        let mat = SparseColMat::new_from_argsort(self.symbolic.clone(), &self.argsort, &values).ok()?;
+        let f = Llt::try_new_with_symbolic(self.llt.clone(), mat.as_ref(), Side::Lower).ok()?;
+        let mut rhs = Mat::<f64>::from_fn(self.n, 1, |i, _| if held[i] { 0.0 } else { -self.defect[i] });
+        f.solve_in_place(rhs.as_mut());
+        let u: Vec<f64> = (0..self.n).map(|i| if held[i] { 0.0 } else { rhs[(i, 0)] }).collect();
+        u.iter().all(|x| x.is_finite()).then_some(u)
+    }
+
+    /// `K_v + (L u)_v`: the curvature left at `v` by the scale factor `u`.
+    pub fn curvature_at(&self, u: &[f64], v: u32) -> f64 {
+        let mut lu = 0.0;
+        for &(r, c, w) in &self.entries {
+            if r == v && c == v {
+                lu += w * u[v as usize];
+            } else if r == v {
+                lu += w * u[c as usize];
+            } else if c == v {
+                lu += w * u[r as usize];
+            }
+        }
+        self.defect[v as usize] + lu
+    }
+}
+
+/// Where `|u|` is largest among `allowed` vertices (not held); ties to the lower id.
+fn peak(u: &[f64], allowed: &[bool], held: &[u32]) -> Option<(u32, f64)> {
+    let mut best: Option<(u32, f64)> = None;
+    for (v, &x) in u.iter().enumerate() {
+        if !allowed[v] || held.contains(&(v as u32)) {
+            continue;
+        }
+        if best.is_none_or(|b| x.abs() > b.1) {
+            best = Some((v as u32, x.abs()));
+        }
+    }
+    best
+}
+
+/// Place cones on `chart` (see the module docs).
+///
+/// * `allowed[v]`: whether vertex `v` may become a cone (boundary vertices and vertices the
+///   user asked to keep free of seams are not).
+/// * `min_cones`: cones placed whatever the bound (a closed sphere needs 2 to be cut).
+/// * `max_cones`: most cones (at least `min_cones` are placed).
+/// * `bound`: stop once `max |u| ≤ bound` (`ln(max_stretch)`).
+/// * `seed`: cones that must be present (from an earlier repair round).
+pub fn place_cones(
+    solver: &ScaleSolver,
+    allowed: &[bool],
+    min_cones: usize,
+    max_cones: usize,
+    bound: f64,
+    seed: &[u32],
+) -> Cones {
+    let max_cones = max_cones.max(min_cones).max(seed.len());
+    let mut cones: Vec<u32> = seed.to_vec();
+    let has_boundary = solver.boundary.iter().any(|&b| b);
+    if cones.is_empty() && !has_boundary && max_cones > 0 {
+        // A closed chart needs one held vertex for the system to be definite: the vertex of
+        // largest curvature.
+        let first = (0..solver.n)
+            .filter(|&v| allowed[v])
+            .max_by(|&a, &b| solver.defect[a].total_cmp(&solver.defect[b]).then(b.cmp(&a)))
+            .or_else(|| (0..solver.n).max_by(|&a, &b| solver.defect[a].total_cmp(&solver.defect[b]).then(b.cmp(&a))));
+        if let Some(v) = first {
+            cones.push(v as u32);
+        }
+    }
+    let zero = || vec![0.0; solver.n];
+    let mut u = solver.solve(&cones).unwrap_or_else(zero);
+    loop {
+        let Some((v, m)) = peak(&u, allowed, &cones) else { break };
+        if cones.len() >= max_cones || (m <= bound && cones.len() >= min_cones) {
+            break;
+        }
+        cones.push(v);
+        match solver.solve(&cones) {
+            Some(x) => u = x,
+            None => break,
+        }
+    }
+    // Re-placement passes: move each cone (not the seeds) to the peak of |u| without it,
+    // keeping a move only when the overall peak drops.
+    let max_abs = |u: &[f64]| u.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let mut best = max_abs(&u);
+    for _pass in 0..2 {
+        let mut moved = false;
+        for i in seed.len()..cones.len() {
+            let mut trial = cones.clone();
+            trial.remove(i);
+            let Some(without) = solver.solve(&trial) else { continue };
+            let Some((v, _)) = peak(&without, allowed, &trial) else { continue };
+            if v == cones[i] {
+                continue;
+            }
+            trial.insert(i, v);
+            if let Some(x) = solver.solve(&trial) {
+                let m = max_abs(&x);
+                if m < best * (1.0 - 1e-9) {
+                    best = m;
+                    cones = trial;
+                    u = x;
+                    moved = true;
+                }
+            }
+        }
+        if !moved {
+            break;
+        }
+    }
+    let curvature = cones.iter().map(|&c| solver.curvature_at(&u, c)).collect();
+    Cones { vertices: cones, curvature, max_u: max_abs(&u), u }
+}

@@ -1,0 +1,198 @@
+//! The polygon edge graph of one chart: what automatic cuts walk on.
+//!
+//! Cuts follow polygon edges only (never the diagonals the core adds to triangulate n-gons), so
+//! this graph is built from the chart's polygons, not from its triangles: vertices are chart
+//! vertices, edges are polygon edges, and the dual graph's nodes are the polygons.
+
+use std::collections::HashMap;
+
+use crate::charts::Chart;
+use crate::geometry::{cross, dot, norm, sub};
+use crate::mesh::PolyMesh;
+
+/// Polygon edge graph of a chart, with per-edge cut costs.
+#[derive(Debug, Clone)]
+pub struct ChartGraph {
+    /// Number of chart vertices.
+    pub n_vertices: usize,
+    /// Polygons over chart vertices, in the chart's face order.
+    pub polygons: Vec<Vec<u32>>,
+    /// Undirected polygon edges `[a, b]` with `a < b`, sorted.
+    pub edges: Vec<[u32; 2]>,
+    /// The one or two polygons beside each edge (`u32::MAX` where there is none: a boundary edge).
+    pub edge_polygons: Vec<[u32; 2]>,
+    /// 3D length of every edge.
+    pub length: Vec<f64>,
+    /// Angle between the normals of the two polygons beside each edge (0 for flat or boundary).
+    pub dihedral: Vec<f64>,
+    /// CSR adjacency: the neighbours of vertex `v` are `adj[adj_start[v]..adj_start[v + 1]]`
+    /// as `(neighbour, edge id)`, in ascending neighbour order (deterministic walks).
+    pub adj_start: Vec<usize>,
+    pub adj: Vec<(u32, u32)>,
+}
+
+impl ChartGraph {
+    /// Build the graph of `chart`, whose faces are polygons of `mesh`.
+    pub fn new(mesh: &PolyMesh<'_>, chart: &Chart) -> ChartGraph {
+        let mut polygons = Vec::with_capacity(chart.faces.len());
+        let mut at = 0usize;
+        for &f in &chart.faces {
+            let m = mesh.face_corners(f as usize).len();
+            polygons.push(chart.corner_vertex[at..at + m].iter().map(|&(_, v)| v).collect::<Vec<u32>>());
+            at += m;
+        }
+        let normals: Vec<[f64; 3]> = polygons
+            .iter()
+            .map(|poly| {
+                // Newell's normal: robust for non-planar polygons.
+                let mut n = [0.0; 3];
+                for i in 0..poly.len() {
+                    let a = chart.positions[poly[i] as usize];
+                    let b = chart.positions[poly[(i + 1) % poly.len()] as usize];
+                    n[0] += (a[1] - b[1]) * (a[2] + b[2]);
+                    n[1] += (a[2] - b[2]) * (a[0] + b[0]);
+                    n[2] += (a[0] - b[0]) * (a[1] + b[1]);
+                }
+                let l = norm(n);
+                if l > 0.0 {
+                    [n[0] / l, n[1] / l, n[2] / l]
+                } else {
+                    [0.0; 3]
+                }
+            })
+            .collect();
+        let mut index: HashMap<(u32, u32), u32> = HashMap::new();
+        let mut edges: Vec<[u32; 2]> = Vec::new();
+        let mut edge_polygons: Vec<[u32; 2]> = Vec::new();
+        for (p, poly) in polygons.iter().enumerate() {
+            for i in 0..poly.len() {
+                let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
+                let key = (a.min(b), a.max(b));
+                let e = *index.entry(key).or_insert_with(|| {
+                    edges.push([key.0, key.1]);
+                    edge_polygons.push([u32::MAX; 2]);
+                    (edges.len() - 1) as u32
+                });
+                let slot = &mut edge_polygons[e as usize];
+                if slot[0] == u32::MAX {
+                    slot[0] = p as u32;
+                } else {
+                    slot[1] = p as u32;
+                }
+            }
+        }
+        // Sort edges so that ids do not depend on hash order.
+        let mut order: Vec<usize> = (0..edges.len()).collect();
+        order.sort_unstable_by_key(|&e| edges[e]);
+        let edges: Vec<[u32; 2]> = order.iter().map(|&e| edges[e]).collect();
+        let edge_polygons: Vec<[u32; 2]> = order.iter().map(|&e| edge_polygons[e]).collect();
+        let length: Vec<f64> = edges
+            .iter()
+            .map(|e| norm(sub(chart.positions[e[1] as usize], chart.positions[e[0] as usize])))
+            .collect();
+        let dihedral: Vec<f64> = edge_polygons
+            .iter()
+            .map(|p| {
+                if p[1] == u32::MAX {
+                    return 0.0;
+                }
+                let (a, b) = (normals[p[0] as usize], normals[p[1] as usize]);
+                let c = norm(cross(a, b));
+                c.atan2(dot(a, b)).abs()
+            })
+            .collect();
+        let n = chart.positions.len();
+        let mut deg = vec![0usize; n + 1];
+        for e in &edges {
+            deg[e[0] as usize] += 1;
+            deg[e[1] as usize] += 1;
+        }
+        let mut adj_start = vec![0usize; n + 1];
+        for v in 0..n {
+            adj_start[v + 1] = adj_start[v] + deg[v];
+        }
+        let mut fill = adj_start.clone();
+        let mut adj = vec![(0u32, 0u32); adj_start[n]];
+        for (id, e) in edges.iter().enumerate() {
+            adj[fill[e[0] as usize]] = (e[1], id as u32);
+            fill[e[0] as usize] += 1;
+            adj[fill[e[1] as usize]] = (e[0], id as u32);
+            fill[e[1] as usize] += 1;
+        }
+        for v in 0..n {
+            adj[adj_start[v]..adj_start[v + 1]].sort_unstable();
+        }
+        ChartGraph { n_vertices: n, polygons, edges, edge_polygons, length, dihedral, adj_start, adj }
+    }
+
+    /// `(neighbour, edge id)` of vertex `v`.
+    #[inline]
+    pub fn neighbours(&self, v: u32) -> &[(u32, u32)] {
+        &self.adj[self.adj_start[v as usize]..self.adj_start[v as usize + 1]]
+    }
+
+    /// Whether edge `e` has a polygon on one side only.
+    #[inline]
+    pub fn is_boundary(&self, e: usize) -> bool {
+        self.edge_polygons[e][1] == u32::MAX
+    }
+}
+
+/// Dijkstra from several sources at once over edge weights `cost`.
+///
+/// Returns `(distance, parent edge, source label)` per vertex (`u32::MAX` for none). Ties are
+/// broken by vertex id, so the result is deterministic. `label_of_source[k]` labels the
+/// sources of `sources[k]`.
+pub fn multi_source_dijkstra(graph: &ChartGraph, cost: &[f64], sources: &[(u32, u32)]) -> (Vec<f64>, Vec<u32>, Vec<u32>) {
+    use std::cmp::Reverse;
+    use std::collections::BinaryHeap;
+    #[derive(PartialEq, PartialOrd)]
+    struct Key(f64);
+    impl Eq for Key {}
+    impl Ord for Key {
+        fn cmp(&self, o: &Self) -> std::cmp::Ordering {
+            self.0.total_cmp(&o.0)
+        }
+    }
+    let n = graph.n_vertices;
+    let mut dist = vec![f64::INFINITY; n];
+    let mut parent = vec![u32::MAX; n];
+    let mut label = vec![u32::MAX; n];
+    let mut heap = BinaryHeap::new();
+    for &(v, l) in sources {
+        if dist[v as usize] > 0.0 || l < label[v as usize] {
+            dist[v as usize] = 0.0;
+            label[v as usize] = l;
+            heap.push(Reverse((Key(0.0), v)));
+        }
+    }
+    let mut done = vec![false; n];
+    while let Some(Reverse((Key(d), v))) = heap.pop() {
+        if done[v as usize] {
+            continue;
+        }
+        done[v as usize] = true;
+        for &(w, e) in graph.neighbours(v) {
+            let nd = d + cost[e as usize];
+            let wi = w as usize;
+            if !done[wi] && (nd < dist[wi] || (nd == dist[wi] && label[v as usize] < label[wi])) {
+                dist[wi] = nd;
+                parent[wi] = e;
+                label[wi] = label[v as usize];
+                heap.push(Reverse((Key(nd), w)));
+            }
+        }
+    }
+    (dist, parent, label)
+}
+
+/// The other end of edge `e` seen from `v`.
+#[inline]
+pub fn other(graph: &ChartGraph, e: u32, v: u32) -> u32 {
+    let [a, b] = graph.edges[e as usize];
+    if a == v {
+        b
+    } else {
+        a
+    }
+}

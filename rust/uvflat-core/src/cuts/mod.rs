@@ -1,0 +1,288 @@
+//! Automatic seams: cut a closed or higher-genus chart into a disk through a few cone
+//! singularities.
+//!
+//! Steps (each in its own file):
+//! 1. Triage (here): a chart with a defect, a disk, or a disk with holes is not cut (holes are
+//!    filled virtually by the methods); a closed chart (genus 0, no boundary) or a chart with
+//!    handles (genus ≥ 1) is.
+//! 2. [`cones`]: greedy cone placement on the linearised conformal scale factor until
+//!    `max |u| ≤ ln(max_stretch)` or `max_cones` (a closed genus-0 chart always gets 2).
+//! 3. [`cut_graph`]: 2g handle loops by tree–cotree with short loops; an approximate Steiner
+//!    tree joining loops, cones and boundary loops by shortest edge paths; dangling branches
+//!    pruned.
+//! 4. The caller adds the cut edges to the seams and rebuilds the chart, which is then a disk
+//!    (χ = 1, one boundary loop), and flattens it with the chosen method; [`split`] halves a
+//!    chart that still cannot be flattened validly after repair rounds.
+//!
+//! Edge cost of a cut: 3D length, × [`SHARP_FACTOR`] on edges whose dihedral angle is at least
+//! `sharp_angle`, × [`AVOID_FACTOR`] on edges touching a vertex the user asked to keep free of
+//! seams (such vertices never become cones). Everything is deterministic: ties break by ids.
+
+pub mod cones;
+pub mod cut_graph;
+pub mod graph;
+pub mod split;
+
+use crate::charts::Chart;
+use crate::error::{Result, UvError};
+use crate::mesh::PolyMesh;
+use crate::unwrap::ChartKind;
+
+pub use graph::ChartGraph;
+
+/// Cost factor of a cut along a sharp edge (cheaper: seams hide along creases).
+pub const SHARP_FACTOR: f64 = 0.2;
+/// Cost factor of a cut along an edge touching an avoided vertex.
+pub const AVOID_FACTOR: f64 = 1.0e4;
+/// Most cones a repair round may add to a chart on top of `max_cones`.
+pub const REPAIR_ROUNDS: usize = 3;
+/// Most halvings of one chart when cones cannot make it valid.
+pub const MAX_SPLIT_DEPTH: usize = 4;
+
+/// Options of automatic seams ([`crate::UnwrapOptions::auto_seams`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct AutoSeamOptions {
+    /// Cut closed and higher-genus charts (default `true`). When `false` such charts fail with
+    /// a "mark seams" reason.
+    pub enabled: bool,
+    /// Largest length scale change inside one island before another cone is added:
+    /// cones are added while `max |u| > ln(max_stretch)` (default 2.0; must be > 1).
+    pub max_stretch: f64,
+    /// Most cones per chart (default 8; a closed sphere gets at least 2 whatever this says).
+    pub max_cones: usize,
+    /// Mesh vertices where seams must not go (default none).
+    pub avoid_vertices: Vec<u32>,
+    /// Dihedral angle (radians) from which an edge counts as sharp and is preferred for
+    /// seams; `None` (default) prefers nothing.
+    pub sharp_angle: Option<f64>,
+}
+
+impl Default for AutoSeamOptions {
+    fn default() -> Self {
+        AutoSeamOptions { enabled: true, max_stretch: 2.0, max_cones: 8, avoid_vertices: Vec::new(), sharp_angle: None }
+    }
+}
+
+impl AutoSeamOptions {
+    /// Check the options against a mesh of `n_vertices` vertices.
+    ///
+    /// Errors: [`UvError::Option`] naming `max_stretch`, `max_cones`, `sharp_angle` or
+    /// `avoid_vertices` (with the entry and vertex).
+    pub fn validate(&self, n_vertices: usize) -> Result<()> {
+        if !(self.max_stretch.is_finite() && self.max_stretch > 1.0) {
+            return Err(UvError::Option {
+                name: "max_stretch",
+                reason: format!("must be a finite number greater than 1, got {}", self.max_stretch),
+            });
+        }
+        if self.max_cones > 1000 {
+            return Err(UvError::Option { name: "max_cones", reason: format!("must be at most 1000, got {}", self.max_cones) });
+        }
+        if let Some(a) = self.sharp_angle {
+            if !(a.is_finite() && a > 0.0 && a < std::f64::consts::PI) {
+                return Err(UvError::Option {
+                    name: "sharp_angle",
+                    reason: format!("must be an angle in radians strictly between 0 and π, got {a}"),
+                });
+            }
+        }
+        if let Some((i, &v)) = self.avoid_vertices.iter().enumerate().find(|(_, &v)| v as usize >= n_vertices) {
+            return Err(UvError::Option {
+                name: "avoid_vertices",
+                reason: format!("entry {i}: vertex index {v} out of range (mesh has {n_vertices} vertices)"),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Whether a chart gets automatic cuts: closed or with handles, and no defect.
+///
+/// A disk with holes is cut only when it is a piece of an automatic split (the caller
+/// decides; a user's chart with holes keeps them and the methods fill them virtually).
+pub fn needs_cut(chart: &Chart) -> bool {
+    chart.defect.is_none() && matches!(chart.kind, ChartKind::Closed | ChartKind::HigherGenus) && !chart.triangles.is_empty()
+}
+
+/// The cuts chosen for one chart.
+#[derive(Debug, Clone, Default)]
+pub struct ChartCuts {
+    /// Cut edges as chart vertex pairs `[a, b]`, `a < b`.
+    pub edges: Vec<[u32; 2]>,
+    /// The same edges as mesh vertex pairs (seams to add).
+    pub seams: Vec<[u32; 2]>,
+    /// Cone vertices (chart vertex ids).
+    pub cones: Vec<u32>,
+    /// Curvature concentrated at each cone (radians).
+    pub cone_curvature: Vec<f64>,
+    /// Total 3D length of the cut edges.
+    pub length: f64,
+    /// Largest |log scale factor| predicted with these cones.
+    pub max_log_scale: f64,
+}
+
+/// Per-edge cut costs of `graph` (see the module docs).
+pub fn edge_costs(graph: &ChartGraph, chart: &Chart, options: &AutoSeamOptions, avoid: &[bool]) -> Vec<f64> {
+    (0..graph.edges.len())
+        .map(|e| {
+            let [a, b] = graph.edges[e];
+            // A zero-length edge still costs a little, so paths stay short in edge count.
+            let mut c = graph.length[e].max(1e-12);
+            if let Some(s) = options.sharp_angle {
+                if graph.dihedral[e] >= s {
+                    c *= SHARP_FACTOR;
+                }
+            }
+            if avoid[chart.mesh_vertex[a as usize] as usize] || avoid[chart.mesh_vertex[b as usize] as usize] {
+                c *= AVOID_FACTOR;
+            }
+            c
+        })
+        .collect()
+}
+
+/// Choose cones and cut edges that open `chart` into a disk.
+///
+/// * `avoid`: per mesh vertex, whether seams must stay away from it.
+/// * `seed_cones`: chart vertices that must be cones (added by repair rounds).
+/// * `extra_cones`: how many cones beyond `options.max_cones` may be placed.
+///
+/// Preconditions: [`needs_cut`] holds. Never fails: the worst case is a cut without the
+/// distortion bound (reported through [`ChartCuts::max_log_scale`]).
+pub fn cut_chart(
+    mesh: &PolyMesh<'_>,
+    chart: &Chart,
+    options: &AutoSeamOptions,
+    avoid: &[bool],
+    seed_cones: &[u32],
+    extra_cones: usize,
+) -> ChartCuts {
+    let graph = ChartGraph::new(mesh, chart);
+    let cost = edge_costs(&graph, chart, options, avoid);
+    let boundary = chart.boundary_mask();
+    let allowed: Vec<bool> =
+        (0..chart.positions.len()).map(|v| !boundary[v] && !avoid[chart.mesh_vertex[v] as usize]).collect();
+    let min_cones = if chart.boundary_loops.is_empty() {
+        if chart.genus == 0 {
+            2
+        } else {
+            1
+        }
+    } else {
+        0
+    };
+    let cones = match cones::ScaleSolver::new(chart) {
+        Some(solver) => cones::place_cones(
+            &solver,
+            &allowed,
+            min_cones,
+            options.max_cones + extra_cones,
+            options.max_stretch.ln(),
+            seed_cones,
+        ),
+        None => cones::Cones { vertices: seed_cones.to_vec(), curvature: vec![0.0; seed_cones.len()], u: vec![], max_u: f64::INFINITY },
+    };
+    let mut cone_vertices = cones.vertices.clone();
+    if cone_vertices.len() < min_cones {
+        // Every vertex is avoided or the system failed: pick far-apart vertices anyway.
+        for v in 0..chart.positions.len() as u32 {
+            if cone_vertices.len() >= min_cones {
+                break;
+            }
+            if !boundary[v as usize] && !cone_vertices.contains(&v) {
+                cone_vertices.push(v);
+            }
+        }
+    }
+    let loops = if chart.genus > 0 {
+        let root = cone_vertices.first().copied().or_else(|| chart.boundary_loops.first().map(|l| l[0])).unwrap_or(0);
+        cut_graph::handle_loops(&graph, &cost, root, &chart.boundary_loops)
+    } else {
+        vec![false; graph.edges.len()]
+    };
+    let cut = cut_graph::join_and_prune(&graph, &cost, loops, &cone_vertices, &chart.boundary_loops);
+    let mut out = ChartCuts {
+        cones: cone_vertices.clone(),
+        cone_curvature: cones.curvature.clone(),
+        max_log_scale: cones.max_u,
+        ..Default::default()
+    };
+    out.cone_curvature.resize(cone_vertices.len(), 0.0);
+    for (e, &c) in cut.iter().enumerate() {
+        if c {
+            let [a, b] = graph.edges[e];
+            out.edges.push([a, b]);
+            let (ma, mb) = (chart.mesh_vertex[a as usize], chart.mesh_vertex[b as usize]);
+            out.seams.push([ma.min(mb), ma.max(mb)]);
+            out.length += graph.length[e];
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::charts::build_charts;
+
+    /// UV sphere-ish closed mesh: a cube's faces subdivided and projected to the unit sphere.
+    fn sphere(n: usize) -> (Vec<[f64; 3]>, Vec<u32>, Vec<u32>) {
+        let mut pos: Vec<[f64; 3]> = Vec::new();
+        let mut index = std::collections::HashMap::new();
+        let mut cv = Vec::new();
+        let mut fs = Vec::new();
+        let mut vid = |p: [i64; 3], pos: &mut Vec<[f64; 3]>| -> u32 {
+            *index.entry(p).or_insert_with(|| {
+                let q = [p[0] as f64 / n as f64 * 2.0 - 1.0, p[1] as f64 / n as f64 * 2.0 - 1.0, p[2] as f64 / n as f64 * 2.0 - 1.0];
+                let l = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt();
+                pos.push([q[0] / l, q[1] / l, q[2] / l]);
+                (pos.len() - 1) as u32
+            })
+        };
+        let n = n as i64;
+        for axis in 0..3 {
+            for side in [0, n] {
+                for i in 0..n {
+                    for j in 0..n {
+                        let mk = |a: i64, b: i64| {
+                            let mut p = [0i64; 3];
+                            p[axis] = side;
+                            p[(axis + 1) % 3] = a;
+                            p[(axis + 2) % 3] = b;
+                            p
+                        };
+                        let mut q = [mk(i, j), mk(i + 1, j), mk(i + 1, j + 1), mk(i, j + 1)];
+                        if side == 0 {
+                            q.reverse();
+                        }
+                        for p in q {
+                            let v = vid(p, &mut pos);
+                            cv.push(v);
+                        }
+                        fs.push(4);
+                    }
+                }
+            }
+        }
+        (pos, cv, fs)
+    }
+
+    #[test]
+    fn sphere_gets_two_or_more_cones_and_a_cut_that_makes_a_disk() {
+        let (p, cv, fs) = sphere(6);
+        let mesh = PolyMesh::new(&p, &cv, &fs).unwrap();
+        let charts = build_charts(&mesh, &[], None);
+        assert_eq!(charts.len(), 1);
+        assert_eq!(charts[0].kind, ChartKind::Closed);
+        let avoid = vec![false; p.len()];
+        let cuts = cut_chart(&mesh, &charts[0], &AutoSeamOptions::default(), &avoid, &[], 0);
+        assert!(cuts.cones.len() >= 2);
+        // Gauss–Bonnet: the cones carry the whole curvature 4π of a sphere.
+        let total: f64 = cuts.cone_curvature.iter().sum();
+        assert!((total - 4.0 * std::f64::consts::PI).abs() < 1e-3, "cone curvature sums to {total}");
+        let cut = build_charts(&mesh, &cuts.seams, None);
+        assert_eq!(cut.len(), 1);
+        cut[0].sanity_check();
+        assert_eq!(cut[0].kind, ChartKind::Disk);
+    }
+}

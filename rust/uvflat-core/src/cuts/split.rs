@@ -1,0 +1,94 @@
+//! Last-resort segmentation: halve a chart that cones and cuts could not make valid.
+//!
+//! Precedent: xatlas's piecewise parameterization and split-until-valid segmenters. Here the
+//! chart's polygons are split at the median of their centroids' projection on the principal
+//! axis of the chart (area-weighted covariance of the polygon centroids), so both halves hold
+//! about half the polygons and the new seam crosses the chart's long direction. The caller
+//! rebuilds both halves (each may need cuts of its own) with a bounded depth.
+
+use super::graph::ChartGraph;
+use crate::charts::Chart;
+
+/// Seams (mesh vertex pairs) that split `chart` into two parts; empty if it has fewer than two
+/// polygons or every candidate split would touch a vertex in `avoid` (per mesh vertex).
+///
+/// Candidates, in order: the principal axis, then x, y and z, each split at the median of the
+/// polygons, then at the 40/60, 30/70 and 20/80 quantiles.
+pub fn halve(graph: &ChartGraph, chart: &Chart, avoid: &[bool]) -> Vec<[u32; 2]> {
+    let np = graph.polygons.len();
+    if np < 2 {
+        return Vec::new();
+    }
+    let centroid: Vec<[f64; 3]> = graph
+        .polygons
+        .iter()
+        .map(|poly| {
+            let mut c = [0.0; 3];
+            for &v in poly {
+                for k in 0..3 {
+                    c[k] += chart.positions[v as usize][k];
+                }
+            }
+            let n = poly.len() as f64;
+            [c[0] / n, c[1] / n, c[2] / n]
+        })
+        .collect();
+    let mut mean = [0.0; 3];
+    for c in &centroid {
+        for k in 0..3 {
+            mean[k] += c[k] / np as f64;
+        }
+    }
+    let mut cov = [[0.0f64; 3]; 3];
+    for c in &centroid {
+        let d = [c[0] - mean[0], c[1] - mean[1], c[2] - mean[2]];
+        for i in 0..3 {
+            for j in 0..3 {
+                cov[i][j] += d[i] * d[j];
+            }
+        }
+    }
+    // Principal axis by power iteration from a fixed start (deterministic).
+    let mut axis = [1.0, 0.7, 0.3];
+    for _ in 0..64 {
+        let next = [
+            cov[0][0] * axis[0] + cov[0][1] * axis[1] + cov[0][2] * axis[2],
+            cov[1][0] * axis[0] + cov[1][1] * axis[1] + cov[1][2] * axis[2],
+            cov[2][0] * axis[0] + cov[2][1] * axis[1] + cov[2][2] * axis[2],
+        ];
+        let l = (next[0] * next[0] + next[1] * next[1] + next[2] * next[2]).sqrt();
+        if !(l > 0.0) {
+            break;
+        }
+        axis = [next[0] / l, next[1] / l, next[2] / l];
+    }
+    for axis in [axis, [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]] {
+        let proj: Vec<f64> = centroid
+            .iter()
+            .map(|c| (c[0] - mean[0]) * axis[0] + (c[1] - mean[1]) * axis[1] + (c[2] - mean[2]) * axis[2])
+            .collect();
+        let mut order: Vec<usize> = (0..np).collect();
+        order.sort_by(|&a, &b| proj[a].total_cmp(&proj[b]).then(a.cmp(&b)));
+        for q in [0.5, 0.4, 0.6, 0.3, 0.7, 0.2, 0.8] {
+            let k = ((np as f64 * q) as usize).clamp(1, np - 1);
+            let mut side = vec![false; np];
+            for &p in &order[k..] {
+                side[p] = true;
+            }
+            let mut seams = Vec::new();
+            let mut touches = false;
+            for (e, p) in graph.edge_polygons.iter().enumerate() {
+                if p[1] != u32::MAX && side[p[0] as usize] != side[p[1] as usize] {
+                    let [a, b] = graph.edges[e];
+                    let (ma, mb) = (chart.mesh_vertex[a as usize], chart.mesh_vertex[b as usize]);
+                    touches |= avoid[ma as usize] || avoid[mb as usize];
+                    seams.push([ma.min(mb), ma.max(mb)]);
+                }
+            }
+            if !touches && !seams.is_empty() {
+                return seams;
+            }
+        }
+    }
+    Vec::new()
+}
