@@ -149,8 +149,8 @@ def test_output_shapes_and_dtypes():
 
     rep = r.charts[0]
     assert isinstance(rep, uvflat.ChartReport)
-    int_fields = ["id", "faces", "triangles", "vertices", "boundary_loops", "genus", "iterations", "flips"]
-    float_fields = ["residual", "conformal", "area", "symmetric_dirichlet", "seconds"]
+    int_fields = ["id", "faces", "triangles", "vertices", "boundary_loops", "genus", "iterations", "flips", "cones"]
+    float_fields = ["residual", "conformal", "area", "symmetric_dirichlet", "seconds", "cut_length"]
     for f in int_fields:
         assert isinstance(getattr(rep, f), int), f
     for f in float_fields:
@@ -496,7 +496,7 @@ def test_selection_splits_into_charts():
 
 def test_closed_cube_fails_and_says_why():
     pos, cv, fs = cube()
-    r = uvflat.unwrap(pos, cv, fs)
+    r = uvflat.unwrap(pos, cv, fs, auto_seams=False)
     (rep,) = r.charts
     assert rep.kind == "closed" and rep.status == "failed"
     assert rep.genus == 0 and rep.boundary_loops == 0

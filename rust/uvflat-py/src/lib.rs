@@ -15,7 +15,7 @@ use numpy::{PyArray1, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyString, PyTuple};
 use uvflat_core::methods::{method_names, Method, OptionValue};
-use uvflat_core::{Fit, MeshInput, UnwrapOptions, UvError};
+use uvflat_core::{AutoSeamOptions, Fit, MeshInput, UnwrapOptions, UvError};
 
 use convert::{floats, indices, Layout};
 use errors::{attrs, error, internal_error, map_uv_error, Kind};
@@ -195,6 +195,65 @@ fn read_seams(py: Python<'_>, seams: Option<&Bound<'_, PyAny>>, n_vertices: usiz
     })
 }
 
+/// An automatic-seams option of the wrong type: an `OptionError` naming it.
+fn option_type_error(py: Python<'_>, name: &str, expected: &str, value: &Bound<'_, PyAny>) -> PyErr {
+    let ty = value.get_type().name().map(|n| n.to_string()).unwrap_or_else(|_| "?".into());
+    let reason = format!("expected {expected}, got a value of type {ty}");
+    error(py, Kind::Option, format!("option {name}: {reason}"), attrs![py; "option" => name.to_string(), "reason" => reason])
+}
+
+/// The automatic-seams keywords of `unwrap` (None means the default), type-checked here and
+/// range-checked by the core.
+fn read_auto_seams(
+    py: Python<'_>,
+    enabled: Option<&Bound<'_, PyAny>>,
+    max_stretch: Option<&Bound<'_, PyAny>>,
+    max_cones: Option<&Bound<'_, PyAny>>,
+    avoid_vertices: Option<&Bound<'_, PyAny>>,
+    sharp_angle: Option<&Bound<'_, PyAny>>,
+    n_vertices: usize,
+) -> PyResult<AutoSeamOptions> {
+    let mut o = AutoSeamOptions::default();
+    if let Some(v) = enabled.filter(|v| !v.is_none()) {
+        o.enabled = if v.is_instance_of::<PyBool>() {
+            v.extract()?
+        } else {
+            return Err(option_type_error(py, "auto_seams", "a bool", v));
+        };
+    }
+    let number = |name: &str, v: &Bound<'_, PyAny>| -> PyResult<f64> {
+        if v.is_instance_of::<PyBool>() || v.is_instance_of::<PyString>() {
+            return Err(option_type_error(py, name, "a number", v));
+        }
+        v.extract::<f64>().map_err(|_| option_type_error(py, name, "a number", v))
+    };
+    if let Some(v) = max_stretch.filter(|v| !v.is_none()) {
+        o.max_stretch = number("max_stretch", v)?;
+    }
+    if let Some(v) = sharp_angle.filter(|v| !v.is_none()) {
+        o.sharp_angle = Some(number("sharp_angle", v)?);
+    }
+    if let Some(v) = max_cones.filter(|v| !v.is_none()) {
+        if v.is_instance_of::<PyBool>() {
+            return Err(option_type_error(py, "max_cones", "a non-negative integer", v));
+        }
+        let k: i64 = v.extract().map_err(|_| option_type_error(py, "max_cones", "a non-negative integer", v))?;
+        if k < 0 {
+            let reason = format!("must be a non-negative integer, got {k}");
+            return Err(error(py, Kind::Option, format!("option max_cones: {reason}"), attrs![py; "option" => "max_cones", "reason" => reason]));
+        }
+        o.max_cones = k.min(u32::MAX as i64) as usize;
+    }
+    if let Some(v) = avoid_vertices.filter(|v| !v.is_none()) {
+        let (idx, _) = indices(v, "avoid_vertices", Layout::Vector("K"), |entry, vertex| {
+            let reason = format!("entry {entry}: vertex index {vertex} out of range (mesh has {n_vertices} vertices)");
+            error(py, Kind::Option, format!("option avoid_vertices: {reason}"), attrs![py; "option" => "avoid_vertices", "reason" => reason])
+        })?;
+        o.avoid_vertices = idx;
+    }
+    Ok(o)
+}
+
 /// Seconds of one sparse factorization (symbolic analysis + numeric) of each chart's own
 /// linear system for a linear method, summed over the mappable charts; `None` for methods
 /// that are not one linear solve. The yardstick for the linear methods' unwrap time.
@@ -225,7 +284,8 @@ fn factorization_seconds(
 /// See the package documentation (`uvflat.unwrap`) for the arguments.
 #[pyfunction]
 #[pyo3(signature = (positions, corner_verts, face_sizes, *, method = "lscm", seams = None, selected = None,
-                    pins = None, pin_uvs = None, fit_to = None, **options))]
+                    pins = None, pin_uvs = None, fit_to = None, auto_seams = None, max_stretch = None,
+                    max_cones = None, avoid_vertices = None, sharp_angle = None, **options))]
 #[allow(clippy::too_many_arguments)]
 fn unwrap(
     py: Python<'_>,
@@ -238,6 +298,11 @@ fn unwrap(
     pins: Option<&Bound<'_, PyAny>>,
     pin_uvs: Option<&Bound<'_, PyAny>>,
     fit_to: Option<&Bound<'_, PyAny>>,
+    auto_seams: Option<&Bound<'_, PyAny>>,
+    max_stretch: Option<&Bound<'_, PyAny>>,
+    max_cones: Option<&Bound<'_, PyAny>>,
+    avoid_vertices: Option<&Bound<'_, PyAny>>,
+    sharp_angle: Option<&Bound<'_, PyAny>>,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PyUnwrapResult> {
     let opts = read_options(py, options)?;
@@ -281,8 +346,9 @@ fn unwrap(
         Some(f) => Fit::Previous(convert::rows::<2, f64>(&floats(f, "fit_to", Layout::Rows("C", 2))?.0)),
     };
 
+    let auto_seams = read_auto_seams(py, auto_seams, max_stretch, max_cones, avoid_vertices, sharp_angle, n_vertices)?;
     let method_name = method.name().to_string();
-    let unwrap_options = UnwrapOptions { method, fit };
+    let unwrap_options = UnwrapOptions { method, fit, auto_seams };
     let (result, seconds) = run_core(py, "fit_to", || {
         let start = Instant::now();
         let r = uvflat_core::unwrap(&soup.input(&seams, selected.as_deref(), &pins), &unwrap_options)?;
@@ -290,6 +356,8 @@ fn unwrap(
     })?;
 
     let n_faces = result.face_chart.len();
+    let n_new = result.new_seams.len();
+    let new_seams = PyArray1::from_vec(py, result.new_seams.iter().flatten().copied().collect::<Vec<u32>>()).reshape([n_new, 2])?;
     let face_solved: Vec<bool> = (0..n_faces).map(|f| result.face_solved(f)).collect();
     let flat_uv: Vec<f64> = result.uv.iter().flat_map(|p| [p[0], p[1]]).collect();
     let uv = PyArray1::from_vec(py, flat_uv).reshape([result.uv.len(), 2])?;
@@ -305,6 +373,7 @@ fn unwrap(
         charts,
         seconds,
         method: method_name,
+        new_seams: new_seams.unbind(),
     })
 }
 

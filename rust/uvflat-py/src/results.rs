@@ -54,6 +54,10 @@ pub struct PyChartReport {
     pub symmetric_dirichlet: f64,
     /// Wall-clock seconds spent on this chart.
     pub seconds: f64,
+    /// Cone singularities placed by automatic seams in this chart (0 if it was not cut).
+    pub cones: usize,
+    /// Total 3D length of the automatic seams made for this chart (0 if it was not cut).
+    pub cut_length: f64,
 }
 
 impl From<&ChartReport> for PyChartReport {
@@ -77,6 +81,8 @@ impl From<&ChartReport> for PyChartReport {
             area: r.distortion.area,
             symmetric_dirichlet: r.distortion.symmetric_dirichlet,
             seconds: r.seconds,
+            cones: r.cones,
+            cut_length: r.cut_length,
         }
     }
 }
@@ -102,6 +108,8 @@ impl PyChartReport {
         d.set_item("area", self.area)?;
         d.set_item("symmetric_dirichlet", self.symmetric_dirichlet)?;
         d.set_item("seconds", self.seconds)?;
+        d.set_item("cones", self.cones)?;
+        d.set_item("cut_length", self.cut_length)?;
         Ok(d)
     }
 }
@@ -142,6 +150,7 @@ pub struct PyUnwrapResult {
     pub charts: Vec<Py<PyChartReport>>,
     pub seconds: f64,
     pub method: String,
+    pub new_seams: Py<PyArray2<u32>>,
 }
 
 impl PyUnwrapResult {
@@ -188,6 +197,12 @@ impl PyUnwrapResult {
         &self.method
     }
 
+    /// Seams added by automatic seams, shape (K, 2), uint32 vertex pairs (a < b), sorted.
+    #[getter]
+    fn new_seams<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<u32>> {
+        self.new_seams.bind(py).clone()
+    }
+
     /// All fields as a plain dict (arrays included, reports as dicts).
     fn as_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);
@@ -198,6 +213,7 @@ impl PyUnwrapResult {
         let reports = self.reports(py).map(|r| r.dict(py)).collect::<PyResult<Vec<_>>>()?;
         d.set_item("charts", PyList::new(py, reports)?)?;
         d.set_item("seconds", self.seconds)?;
+        d.set_item("new_seams", self.new_seams.bind(py))?;
         Ok(d)
     }
 

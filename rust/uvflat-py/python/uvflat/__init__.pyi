@@ -80,6 +80,12 @@ class ChartReport:
     @property
     def seconds(self) -> float:
         """Wall-clock seconds spent mapping this chart."""
+    @property
+    def cones(self) -> int:
+        """Cone singularities placed by automatic seams in this chart (0 if it was not cut)."""
+    @property
+    def cut_length(self) -> float:
+        """Total 3D length of the automatic seams made for this chart (0 if it was not cut)."""
     def as_dict(self) -> dict[str, Any]:
         """All fields as a plain dict."""
 
@@ -104,6 +110,9 @@ class UnwrapResult:
     @property
     def method(self) -> str:
         """Name of the requested method."""
+    @property
+    def new_seams(self) -> npt.NDArray[np.uint32]:
+        """Seams added by automatic seams, shape (K, 2), vertex pairs (a < b), sorted."""
     def as_dict(self) -> dict[str, Any]:
         """All fields as a plain dict (arrays included, chart reports as dicts)."""
 
@@ -161,14 +170,22 @@ def unwrap(
     pins: _Ints | None = None,
     pin_uvs: _Floats | None = None,
     fit_to: _Floats | None = None,
+    auto_seams: bool = True,
+    max_stretch: float = 2.0,
+    max_cones: int = 8,
+    avoid_vertices: _Ints | None = None,
+    sharp_angle: float | None = None,
     **options: bool | int | float | str | tuple[_Ints, _Floats],
 ) -> UnwrapResult:
     """Unwrap the selected faces of a polygon mesh into per-corner UVs.
 
     The selection is split into charts along seams, non-manifold edges and the selection
     border; every chart is mapped by ``method`` (charts in parallel, without the GIL).
-    Charts that cannot be mapped (e.g. a closed surface without seams) are not errors: they
-    come back with ``status == "failed"`` and a ``reason``, and their faces get no UVs.
+    With ``auto_seams`` (the default), a closed chart or a chart with handles is cut open
+    through a few cone singularities (its new seams are in ``new_seams``; a chart whose
+    flattening still flips, overlaps or stretches beyond ``max_stretch`` gets more cones or is
+    split). Charts that cannot be mapped are not errors: they come back with
+    ``status == "failed"`` and a ``reason``, and their faces get no UVs.
 
     Args:
         positions: (V, 3) vertex positions.
@@ -189,6 +206,16 @@ def unwrap(
             boundary, pi keeps the outline straight and pi/2 makes a right-angled corner; at
             an interior vertex a sum other than 2*pi is a cone, realised exactly when a seam
             runs from it to the boundary.
+        auto_seams: cut closed and higher-genus charts automatically (default True); with
+            False they fail with a "mark seams" reason.
+        max_stretch: how much the length scale may vary inside one island before another
+            cone (or, past ``max_cones``, a split) is added; > 1, default 2.0.
+        max_cones: most cone singularities per chart (default 8; a closed sphere gets at
+            least 2).
+        avoid_vertices: (K,) mesh vertex indices where seams must not go (no cut edge touches
+            them and none becomes a cone).
+        sharp_angle: dihedral angle in radians from which an edge counts as sharp and is
+            preferred for seams; default None (no preference).
 
     Raises:
         InputError: wrong shape, dtype or length; a non-finite ``fit_to`` UV.
