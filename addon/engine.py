@@ -64,12 +64,19 @@ class Summary:
     failed: list[ChartProblem] = field(default_factory=list)
     fallback: list[ChartProblem] = field(default_factory=list)
     packed: bool = False
+    seams_added: int = 0   # edges cut by automatic seams
+    cones: int = 0         # cone singularities placed by automatic seams
+    seams_marked: bool = False
     results: dict = field(default_factory=dict)  # object name -> uvflat.UnwrapResult
 
     def line(self) -> str:
         text = (f"uvflat {self.method}: {self.charts} chart{'s' * (self.charts != 1)}, "
                 f"{self.faces} face{'s' * (self.faces != 1)} in {self.seconds:.3f} s "
                 f"(solve {self.solve_seconds:.3f} s)")
+        if self.seams_added:
+            text += (f"; auto seams: {self.seams_added} edge{'s' * (self.seams_added != 1)} cut "
+                     f"through {self.cones} cone{'s' * (self.cones != 1)}"
+                     f"{' (marked as seams)' if self.seams_marked else ''}")
         if self.failed:
             shown = "; ".join(f"{p.object_name} chart {p.chart} ({p.kind}): {p.reason}"
                               for p in self.failed[:3])
@@ -96,6 +103,8 @@ class _Job:
     written: bool = False
     selection: dict | None = None
     raw_selected: np.ndarray | None = None
+    avoid: np.ndarray | None = None        # vertex indices where seams must not go
+    old_seams: np.ndarray | None = None    # (E,) seam flags before marking new seams
 
 
 # ---------------------------------------------------------------------------------------------
@@ -147,8 +156,52 @@ def _read(obj) -> _Job:
     return job
 
 
+def _read_avoid_groups(context, objects, in_mode, active, group):
+    """Vertices of vertex group ``group`` per object name, read in bulk: Blender's own
+    *Select* of the group marks them, the selection is read as one array and then put back
+    exactly as it was. Objects without the group are left out. Runs in object mode."""
+    wanted = [o for o in objects if group and o.vertex_groups.get(group) is not None]
+    if not wanted:
+        return {}
+    out = {}
+    saved = {o.name: (mesh_io.save_selection(o.data), o.vertex_groups.active_index) for o in wanted}
+    try:
+        for o in wanted:
+            _enter_edit_mode(context.view_layer, [o], o)
+            try:
+                bpy.ops.mesh.select_all(action="DESELECT")
+                o.vertex_groups.active_index = o.vertex_groups[group].index
+                bpy.ops.object.vertex_group_select()
+            finally:
+                _leave_edit_mode([o])
+            out[o.name] = np.flatnonzero(mesh_io.read_vertex_selection(o.data))
+    finally:
+        for o in wanted:
+            selection, index = saved[o.name]
+            mesh_io.restore_selection(o.data, selection)
+            o.vertex_groups.active_index = index
+    return out
+
+
+def _mark_new_seams(job: _Job) -> int:
+    """Mark the edges cut by automatic seams as seams; returns how many were new."""
+    new = np.asarray(getattr(job.result, "new_seams", ()))
+    if not len(new):
+        return 0
+    mesh = job.obj.data
+    _, use_seam = mesh_io.read_edges(mesh)
+    add = mesh_io.seam_mask_of_pairs(mesh, new) & ~use_seam
+    if not add.any():
+        return 0
+    job.old_seams = use_seam.copy()
+    mesh_io.write_seams(mesh, use_seam | add)
+    return int(add.sum())
+
+
 def _solve(core, job: _Job, method, options, use_fit):
     kwargs = dict(options)
+    if job.avoid is not None and len(job.avoid):
+        kwargs["avoid_vertices"] = job.avoid.astype(np.int64)
     seams = mesh_io.read_seams(job.obj.data)
     if len(seams):
         kwargs["seams"] = seams.astype(np.int64)
@@ -198,6 +251,9 @@ def _restore(jobs):
     """Put every UV map and selection back as it was before this run."""
     for job in jobs:
         mesh = job.obj.data
+        if job.old_seams is not None:
+            mesh_io.write_seams(mesh, job.old_seams)
+            job.old_seams = None
         if job.written:
             if job.created_uv:
                 mesh_io.remove_uv_map(mesh, job.uv_name)
@@ -249,8 +305,15 @@ def _pack(context, jobs, in_mode, active, margin, shape) -> bool:
 
 
 def unwrap_edit_objects(context, method, options, *, pack=True, margin=0.001,
-                        pack_shape="AABB") -> Summary:
-    """Unwrap the selected faces of every mesh object in edit mode; see the module docstring."""
+                        pack_shape="AABB", auto_seams=None, mark_seams=True,
+                        avoid_group="") -> Summary:
+    """Unwrap the selected faces of every mesh object in edit mode; see the module docstring.
+
+    ``auto_seams``: the automatic-seams keywords of ``uvflat.unwrap`` (default: the core's);
+    ``mark_seams``: mark the edges it cut as seams; ``avoid_group``: name of a vertex group
+    where new seams must not go.
+    """
+    options = {**(auto_seams or {}), **options}
     start = time.perf_counter()
     core = import_core()
     if method not in core.METHODS:
@@ -269,9 +332,13 @@ def unwrap_edit_objects(context, method, options, *, pack=True, margin=0.001,
     _leave_edit_mode(in_mode)
     in_edit = False
     try:
+        avoid = {}
+        if avoid_group and (auto_seams or {}).get("auto_seams", True):
+            avoid = _read_avoid_groups(context, objects, in_mode, active, avoid_group)
         # 2. read and solve everything before writing anything
         for obj in objects:
             job = _read(obj)
+            job.avoid = avoid.get(obj.name)
             if not job.selected.any():
                 continue
             t0 = time.perf_counter()
@@ -285,9 +352,14 @@ def unwrap_edit_objects(context, method, options, *, pack=True, margin=0.001,
             raise UnwrapError("no faces selected")
 
         try:
-            # 3. write
+            # 3. write (UVs, then the seams automatic seams cut)
             for job in jobs:
                 _write(job)
+                if mark_seams:
+                    summary.seams_added += _mark_new_seams(job)
+                else:
+                    summary.seams_added += len(getattr(job.result, "new_seams", ()))
+            summary.seams_marked = bool(mark_seams and summary.seams_added)
             # 4. pack the new islands only
             if pack:
                 in_edit = _pack(context, jobs, in_mode, active, margin, pack_shape)
@@ -305,6 +377,7 @@ def unwrap_edit_objects(context, method, options, *, pack=True, margin=0.001,
         summary.results[job.obj.name] = job.result
         summary.faces += int((np.asarray(job.result.face_solved, dtype=bool) & job.selected).sum())
         for chart in job.result.charts:
+            summary.cones += getattr(chart, "cones", 0)
             problem = ChartProblem(job.obj.name, chart.id, chart.kind, chart.status,
                                    chart.reason or "no reason given")
             if chart.status == "failed":

@@ -86,6 +86,30 @@ def read_seams(mesh):
     return edge_verts[use_seam]
 
 
+def read_vertex_selection(mesh):
+    """Selected vertices as a ``(V,)`` bool mask."""
+    n_v = len(mesh.vertices)
+    selected = _attribute(mesh, (".select_vert",), n_v, bool)
+    if selected is None:
+        selected = _get(mesh.vertices, "select", n_v, bool)
+    return selected
+
+
+def seam_mask_of_pairs(mesh, pairs):
+    """``(E,)`` bool mask of the edges whose vertex pairs are in ``pairs`` ((K,2), any order)."""
+    edge_verts, _ = read_edges(mesh)
+    mask = np.zeros(len(edge_verts), dtype=bool)
+    pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+    if not len(pairs) or not len(edge_verts):
+        return mask
+    n = np.int64(max(int(edge_verts.max()), int(pairs.max())) + 1)
+    ev = np.sort(edge_verts.astype(np.int64), axis=1)
+    keys = ev[:, 0] * n + ev[:, 1]
+    pp = np.sort(pairs, axis=1)
+    mask[np.isin(keys, pp[:, 0] * n + pp[:, 1])] = True
+    return mask
+
+
 def read_face_selection(mesh, *, include_hidden=False):
     """Selected faces as an ``(F,)`` bool mask; hidden faces are left out unless asked."""
     n_f = len(mesh.polygons)

@@ -9,10 +9,13 @@ scripts all read these two tables.
 
 from __future__ import annotations
 
+import math
+
+import bpy
 from dataclasses import dataclass
 from typing import Any, Callable
 
-from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty
+from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, StringProperty
 
 
 @dataclass(frozen=True)
@@ -176,9 +179,70 @@ def common_properties() -> dict[str, Any]:
             default=0.001, min=0.0, max=1.0, precision=3, step=0.1,
         ),
     }
+    props.update(auto_seam_properties())
     for key, option in OPTIONS.items():
         props[key] = option.make_property()
     return props
+
+
+def auto_seam_properties() -> dict[str, Any]:
+    """Fresh bpy properties of automatic seams (closed and higher-genus charts)."""
+    return {
+        "auto_seams": BoolProperty(
+            name="Auto Seams",
+            description="Cut closed charts and charts with handles open through a few cone "
+                        "singularities, so every selected face unwraps. Your own seams are "
+                        "kept and used first",
+            default=True,
+        ),
+        "max_stretch": FloatProperty(
+            name="Max Stretch",
+            description="How much texel density may vary inside one island before another "
+                        "cone or cut is added",
+            default=2.0, min=1.05, max=100.0, soft_max=8.0, precision=2, step=10,
+        ),
+        "max_cones": IntProperty(
+            name="Max Cones",
+            description="Most cone singularities per chart (a closed sphere always gets 2)",
+            default=8, min=0, max=1000, soft_max=64,
+        ),
+        "prefer_sharp": BoolProperty(
+            name="Prefer Sharp Edges",
+            description="Let new seams run along edges sharper than Sharp Angle",
+            default=False,
+        ),
+        "sharp_angle": FloatProperty(
+            name="Sharp Angle",
+            description="Dihedral angle from which an edge counts as sharp",
+            default=math.radians(30.0), min=math.radians(1.0), max=math.radians(179.0),
+            subtype="ANGLE",
+        ),
+        "avoid_group": StringProperty(
+            name="Avoid Seams",
+            description="Vertex group where new seams must not go (e.g. the face); empty for "
+                        "none",
+            default="",
+        ),
+        "mark_seams": BoolProperty(
+            name="Mark Seams",
+            description="Mark the cuts it made as edge seams, so you can see and edit them "
+                        "and unwrap again",
+            default=True,
+        ),
+    }
+
+
+AUTO_SEAM_NAMES: tuple[str, ...] = tuple(auto_seam_properties().keys())
+
+
+def auto_seam_options(props) -> dict[str, Any]:
+    """The automatic-seams keywords of ``uvflat.unwrap`` from the properties in ``props``."""
+    return {
+        "auto_seams": bool(props.auto_seams),
+        "max_stretch": float(props.max_stretch),
+        "max_cones": int(props.max_cones),
+        "sharp_angle": float(props.sharp_angle) if props.prefer_sharp else None,
+    }
 
 
 SETTING_NAMES: tuple[str, ...] = tuple(common_properties().keys())
@@ -205,6 +269,21 @@ def draw_settings(layout, props) -> None:
     layout.prop(props, "method")
     for key in METHOD_BY_ID[props.method].options:
         layout.prop(props, key)
+    layout.prop(props, "auto_seams")
+    col = layout.column()
+    col.active = props.auto_seams
+    col.prop(props, "max_stretch")
+    col.prop(props, "max_cones")
+    col.prop(props, "prefer_sharp")
+    sub = col.column()
+    sub.active = props.auto_seams and props.prefer_sharp
+    sub.prop(props, "sharp_angle")
+    obj = getattr(bpy.context, "active_object", None)
+    if obj is not None and obj.type == "MESH":
+        col.prop_search(props, "avoid_group", obj, "vertex_groups")
+    else:
+        col.prop(props, "avoid_group")
+    col.prop(props, "mark_seams")
     layout.prop(props, "pack")
     col = layout.column()
     col.active = props.pack

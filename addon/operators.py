@@ -37,6 +37,9 @@ class UV_OT_uvflat_unwrap(bpy.types.Operator):
                 pack=self.pack,
                 margin=self.margin,
                 pack_shape=self.pack_shape,
+                auto_seams=methods.auto_seam_options(self),
+                mark_seams=self.mark_seams,
+                avoid_group=self.avoid_group,
             )
         except engine.UnwrapError as ex:
             self.report({"ERROR"}, f"uvflat: {ex}")

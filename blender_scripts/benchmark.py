@@ -184,7 +184,22 @@ def main(argv=None):
                         help="comma-separated Blender unwrap methods")
     parser.add_argument("--repeat", type=int, default=3, help="repetitions (median reported)")
     parser.add_argument("--out", type=Path, default=None, help="write the markdown table here")
+    parser.add_argument("--closed", action="store_true",
+                        help="the closed-mesh table instead: automatic seams against Smart UV "
+                             "Project + ANGLE_BASED and xatlas (see closed_benchmark.py)")
     args = parser.parse_args(argv)
+    if args.closed:
+        import closed_benchmark
+
+        names = [n for n in args.meshes.split(",") if n]
+        chosen = [f for f in closed_benchmark.CLOSED if not names or f.split(".")[0] in names]
+        text = closed_benchmark.run(chosen, args.repeat)
+        print()
+        print(text)
+        if args.out:
+            args.out.parent.mkdir(parents=True, exist_ok=True)
+            args.out.write_text(text + "\n")
+        return 0
 
     import uvflat
 

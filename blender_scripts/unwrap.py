@@ -12,6 +12,7 @@ Goes through the add-on's own operator (``bpy.ops.uv.uvflat_unwrap``), registere
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import time
 from pathlib import Path
@@ -53,6 +54,22 @@ def parse_args(argv):
     parser.add_argument("--margin", type=float, default=0.001, help="packing margin")
     parser.add_argument("--uv-name", default=None,
                         help="write into a new UV map of this name (default: the active one)")
+    parser.add_argument("--auto-seams", action=argparse.BooleanOptionalAction, default=True,
+                        help="cut closed and higher-genus charts open through cone "
+                             "singularities (a closed scan unwraps with no seams marked)")
+    parser.add_argument("--max-stretch", type=float, default=2.0,
+                        help="automatic seams: how much the length scale may vary inside one "
+                             "island before another cone or cut is added (> 1)")
+    parser.add_argument("--max-cones", type=int, default=8,
+                        help="automatic seams: most cone singularities per chart")
+    parser.add_argument("--sharp-angle", type=float, default=None,
+                        help="automatic seams: prefer edges whose dihedral angle is at least "
+                             "this many degrees")
+    parser.add_argument("--avoid-group", default="",
+                        help="automatic seams: vertex group (in a .blend input) where new "
+                             "seams must not go")
+    parser.add_argument("--mark-seams", action=argparse.BooleanOptionalAction, default=True,
+                        help="mark the cuts automatic seams made as edge seams in the output")
     parser.add_argument("--png", type=Path, default=None, help="UV layout image path")
     parser.add_argument("--size", type=int, default=1024, help="UV layout image size")
     return parser.parse_args(argv)
@@ -82,6 +99,13 @@ def main(argv=None):
     args = parse_args(sys.argv[1:] if argv is None else argv)
     if args.output.suffix.lower() not in (".obj", ".glb", ".blend"):
         raise SystemExit(f"unsupported output format {args.output.suffix} (use .obj, .glb or .blend)")
+    if not (math.isfinite(args.max_stretch) and args.max_stretch > 1.0):
+        raise SystemExit(f"--max-stretch {args.max_stretch}: must be a finite number greater than 1")
+    if not 0 <= args.max_cones <= 1000:
+        raise SystemExit(f"--max-cones {args.max_cones}: must be between 0 and 1000")
+    if args.sharp_angle is not None and not (math.isfinite(args.sharp_angle)
+                                             and 0.0 < args.sharp_angle < 180.0):
+        raise SystemExit(f"--sharp-angle {args.sharp_angle}: must be between 0 and 180 degrees")
     common.reset_scene()
     addon = common.load_addon()
     mesh_io = addon.mesh_io
@@ -127,8 +151,15 @@ def main(argv=None):
 
     common.edit_mode([obj])
     log(f"unwrapping with {args.method}")
+    auto_props = {"auto_seams": args.auto_seams, "max_stretch": args.max_stretch,
+                  "max_cones": args.max_cones, "mark_seams": args.mark_seams,
+                  "avoid_group": args.avoid_group,
+                  "prefer_sharp": args.sharp_angle is not None}
+    if args.sharp_angle is not None:
+        auto_props["sharp_angle"] = math.radians(args.sharp_angle)
     result = bpy.ops.uv.uvflat_unwrap(
-        method=args.method, pack=not args.no_pack, margin=args.margin, **method_props)
+        method=args.method, pack=not args.no_pack, margin=args.margin, **method_props,
+        **auto_props)
     common.object_mode()
     summary = addon.engine.LAST_SUMMARY
     if "FINISHED" not in result or summary is None:

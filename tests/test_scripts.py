@@ -58,3 +58,57 @@ def test_batch_unwrap_refuses_an_option_the_method_does_not_take(tmp_path):
     assert r.returncode != 0
     assert "not an option of abf" in (r.stdout + r.stderr)
     assert not (tmp_path / "out.obj").exists()
+
+
+def _closed_box_obj(path: Path, n: int = 4) -> None:
+    """A closed box of 6·n² quads (no seams: needs automatic seams to unwrap)."""
+    verts, index, faces = [], {}, []
+
+    def vid(p):
+        if p not in index:
+            index[p] = len(verts) + 1
+            verts.append(p)
+        return index[p]
+
+    for axis in range(3):
+        for side in (0, n):
+            for i in range(n):
+                for j in range(n):
+                    def mk(a, b):
+                        p = [0, 0, 0]
+                        p[axis], p[(axis + 1) % 3], p[(axis + 2) % 3] = side, a, b
+                        return tuple(p)
+                    q = [mk(i, j), mk(i + 1, j), mk(i + 1, j + 1), mk(i, j + 1)]
+                    if side == 0:
+                        q.reverse()
+                    faces.append([vid(p) for p in q])
+    lines = [f"v {x} {y} {z}" for x, y, z in verts] + ["f " + " ".join(map(str, f)) for f in faces]
+    path.write_text("\n".join(lines) + "\n")
+
+
+def test_batch_unwraps_a_closed_scan_with_auto_seams(tmp_path):
+    src, out = tmp_path / "box.obj", tmp_path / "out.obj"
+    _closed_box_obj(src)
+    r = _run(src, out, "--method", "abf")
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "auto seams" in r.stdout
+    text = out.read_text()
+    faces = [line for line in text.splitlines() if line.startswith("f ")]
+    assert len(faces) == 96 and all("/" in f for f in faces)
+    uv = np.array([line.split()[1:3] for line in text.splitlines() if line.startswith("vt ")], float)
+    assert np.all(np.isfinite(uv)) and np.ptp(uv, axis=0).min() > 0.1
+    # Without automatic seams the closed box is refused: exit status 2 (charts not solved).
+    r = _run(src, tmp_path / "off.obj", "--method", "abf", "--no-auto-seams")
+    assert r.returncode == 2, r.stdout + r.stderr
+    assert "not solved" in r.stdout
+
+
+@pytest.mark.parametrize("flag", [["--max-stretch", "1"], ["--max-stretch", "nan"],
+                                  ["--max-cones", "-1"], ["--sharp-angle", "200"]])
+def test_batch_refuses_bad_auto_seam_arguments_before_writing(tmp_path, flag):
+    src, out = tmp_path / "box.obj", tmp_path / "out.obj"
+    _closed_box_obj(src)
+    r = _run(src, out, *flag)
+    assert r.returncode == 1, r.stdout + r.stderr
+    assert flag[0] in (r.stdout + r.stderr)
+    assert not out.exists()

@@ -1,0 +1,111 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""Headless-bpy tests of automatic seams through the installed extension's operator."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from test_addon import (  # noqa: F401  (fixtures are used by name)
+    bpy,
+    common,
+    ext,
+    flipped_triangles,
+    read,
+    scene,
+    shared_mesh,
+    unwrap,
+)
+
+
+def _sphere(name="Sphere"):
+    bpy.ops.mesh.primitive_uv_sphere_add(segments=24, ring_count=12)
+    obj = bpy.context.active_object
+    obj.name = name
+    common.mesh_io().write_seams(obj.data, np.zeros(len(obj.data.edges), dtype=bool))
+    return obj
+
+
+def test_closed_sphere_is_cut_seams_marked_and_every_face_unwrapped(ext, scene):
+    obj = _sphere()
+    result, summary = unwrap(ext, [obj], method="abf")
+    assert result == {"FINISHED"}
+    res = summary.results[obj.name]
+    assert np.asarray(res.face_solved).all()
+    after = read(ext, obj)
+    # The marked seams are exactly the cut edges the core reported.
+    assert summary.seams_added == len(after.seams) == len(res.new_seams) > 0
+    marked = {tuple(sorted(map(int, s))) for s in after.seams}
+    assert marked == {tuple(map(int, s)) for s in res.new_seams}
+    assert summary.cones >= 2 and "auto seams" in summary.line()
+    assert flipped_triangles(after, np.asarray(res.chart)) == 0
+    # Unwrapping again with those seams cuts nothing more and keeps every face solved.
+    result, summary = unwrap(ext, [obj], method="abf")
+    assert summary.seams_added == 0
+    assert np.asarray(summary.results[obj.name].face_solved).all()
+
+
+def test_auto_seams_off_keeps_the_refusal_and_the_mesh(ext, scene):
+    obj = _sphere()
+    before = read(ext, obj)
+    result, summary = unwrap(ext, [obj], method="lscm", auto_seams=False)
+    assert result == {"FINISHED"}
+    after = read(ext, obj)
+    assert summary.failed and "not solved" in summary.line() and "seam" in summary.line()
+    assert np.array_equal(after.uv, before.uv)
+    assert len(after.seams) == 0
+
+
+def test_mark_seams_off_unwraps_without_touching_seams(ext, scene):
+    obj = _sphere()
+    result, summary = unwrap(ext, [obj], method="lscm", mark_seams=False)
+    assert result == {"FINISHED"}
+    assert np.asarray(summary.results[obj.name].face_solved).all()
+    assert len(read(ext, obj).seams) == 0
+    assert summary.seams_added > 0 and "marked" not in summary.line()
+
+
+def test_avoid_group_keeps_seams_away_and_selection_intact(ext, scene):
+    obj = _sphere()
+    positions = read(ext, obj).positions
+    top = np.flatnonzero(positions[:, 2] > 0.2)
+    group = obj.vertex_groups.new(name="face")
+    group.add(top.tolist(), 1.0, "REPLACE")
+    io = common.mesh_io()
+    result, summary = unwrap(ext, [obj], method="slim", avoid_group="face")
+    assert result == {"FINISHED"}
+    after = read(ext, obj)
+    assert len(after.seams) > 0
+    assert not np.isin(after.seams, top).any(), "a new seam touches the avoided vertex group"
+    # Every face was selected for the unwrap and still is; the group's active index is kept.
+    assert io.read_face_selection(obj.data).all()
+    assert obj.vertex_groups.active_index == group.index
+
+
+def test_failure_after_marking_restores_seams_and_uvs(ext, scene, monkeypatch):
+    obj = _sphere()
+    io = common.mesh_io()
+    before = read(ext, obj)
+
+    def failing_pack(*args, **kwargs):
+        raise RuntimeError("injected packing failure")
+
+    monkeypatch.setattr(ext.engine, "_pack", failing_pack)
+    with pytest.raises(RuntimeError, match="injected"):
+        unwrap(ext, [obj], method="lscm", pack=True)
+    after = read(ext, obj)
+    assert len(after.seams) == 0, "seams marked by a failed unwrap were not removed"
+    assert np.array_equal(after.uv, before.uv)
+    assert io.read_face_selection(obj.data).all()
+
+
+@pytest.mark.parametrize("name", ["bunny.off", "3holes.off"])
+def test_shared_closed_meshes_through_the_operator(ext, scene, name):
+    obj = shared_mesh(name)
+    result, summary = unwrap(ext, [obj], method="abf")
+    assert result == {"FINISHED"}
+    res = summary.results[obj.name]
+    assert np.asarray(res.face_solved).all()
+    assert not summary.failed
+    after = read(ext, obj)
+    assert flipped_triangles(after, np.asarray(res.chart)) == 0
