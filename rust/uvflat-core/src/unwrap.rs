@@ -366,18 +366,34 @@ struct Context<'a, 'm> {
 }
 
 /// Whether a solved piece is good enough to stop repairing: mapped, no flips, an outline that
-/// does not cross itself, and area distortion within `max_stretch`.
-fn piece_valid(report: &ChartReport, max_stretch: f64) -> bool {
-    report.status != ChartStatus::Failed && report.flips == 0 && !report.overlap && report.distortion.area <= max_stretch
+/// does not cross itself, and area distortion within `area_bound` ([`cuts::area_bound`]).
+fn piece_valid(report: &ChartReport, area_bound: f64) -> bool {
+    report.status != ChartStatus::Failed && report.flips == 0 && !report.overlap && report.distortion.area <= area_bound
 }
 
-/// How bad a set of pieces is (lower is better): failures, overlaps, flips, then area excess.
-fn badness(pieces: &[Piece], max_stretch: f64) -> (usize, usize, usize, usize) {
+/// How bad a set of pieces is (lower is better): failures, overlaps, flips, then the
+/// face-weighted excess of area distortion over `area_bound`.
+fn badness(pieces: &[Piece], area_bound: f64) -> (usize, usize, usize, f64) {
     let failed = pieces.iter().filter(|p| p.report.status == ChartStatus::Failed).count();
     let overlaps = pieces.iter().filter(|p| p.report.overlap).count();
     let flips = pieces.iter().map(|p| p.report.flips).sum();
-    let stretched = pieces.iter().filter(|p| !(p.report.distortion.area <= max_stretch)).count();
-    (failed, overlaps, flips, stretched)
+    let faces: usize = pieces.iter().map(|p| p.report.faces).sum::<usize>().max(1);
+    let excess: f64 = pieces
+        .iter()
+        .map(|p| {
+            let a = p.report.distortion.area;
+            let e = if a.is_finite() { (a - area_bound).max(0.0) } else { 1e300 };
+            e * p.report.faces as f64
+        })
+        .sum::<f64>()
+        / faces as f64;
+    (failed, overlaps, flips, excess)
+}
+
+/// `badness(a) < badness(b)`.
+fn better(a: &[Piece], b: &[Piece], area_bound: f64) -> bool {
+    let (x, y) = (badness(a, area_bound), badness(b, area_bound));
+    (x.0, x.1, x.2).cmp(&(y.0, y.1, y.2)).then(x.3.total_cmp(&y.3)) == std::cmp::Ordering::Less
 }
 
 /// Faces of `chart` as a selection mask over the mesh.
@@ -433,7 +449,7 @@ fn tri_area2(uv: &[[f64; 2]], t: &[u32; 3]) -> f64 {
 /// half. Never fails: the last attempt is returned with its honest report.
 fn auto_cut(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], depth: usize) -> Vec<Piece> {
     let mask = face_mask(ctx.mesh.n_faces(), chart);
-    let max_stretch = ctx.options.auto_seams.max_stretch;
+    let max_stretch = cuts::area_bound(ctx.options.auto_seams.max_stretch);
     let mut seed: Vec<u32> = Vec::new();
     let mut last: Vec<Piece> = Vec::new();
     for round in 0..=cuts::REPAIR_ROUNDS {
@@ -497,7 +513,7 @@ fn auto_cut(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], depth
                 }
                 out.extend(list);
             }
-            if badness(&out, max_stretch) < badness(&last, max_stretch) {
+            if better(&out, &last, max_stretch) {
                 return out;
             }
         }

@@ -39,6 +39,12 @@ pub const REPAIR_ROUNDS: usize = 3;
 /// Most halvings of one chart when cones cannot make it valid.
 pub const MAX_SPLIT_DEPTH: usize = 4;
 
+/// The area distortion (area-weighted mean of max(J, 1/J), DESIGN.md) above which a cut
+/// chart gets another cone or is split: `(1 + max_stretch) / 2` (1.5 for the default 2×).
+pub fn area_bound(max_stretch: f64) -> f64 {
+    0.5 * (1.0 + max_stretch)
+}
+
 /// Options of automatic seams ([`crate::UnwrapOptions::auto_seams`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct AutoSeamOptions {
@@ -46,7 +52,9 @@ pub struct AutoSeamOptions {
     /// a "mark seams" reason.
     pub enabled: bool,
     /// Largest length scale change inside one island before another cone is added:
-    /// cones are added while `max |u| > ln(max_stretch)` (default 2.0; must be > 1).
+    /// cones are added while `max |u| > ln(max_stretch)` (up to `max_cones`), and a flattened
+    /// piece whose area distortion exceeds [`area_bound`] gets another cone or is split
+    /// (default 2.0; must be > 1).
     pub max_stretch: f64,
     /// Most cones per chart (default 8; a closed sphere gets at least 2 whatever this says).
     pub max_cones: usize,

@@ -75,6 +75,7 @@ pub fn halve(graph: &ChartGraph, chart: &Chart, avoid: &[bool]) -> Vec<[u32; 2]>
             for &p in &order[k..] {
                 side[p] = true;
             }
+            keep_sides_connected(graph, &mut side);
             let mut seams = Vec::new();
             let mut touches = false;
             for (e, p) in graph.edge_polygons.iter().enumerate() {
@@ -91,4 +92,61 @@ pub fn halve(graph: &ChartGraph, chart: &Chart, avoid: &[bool]) -> Vec<[u32; 2]>
         }
     }
     Vec::new()
+}
+
+/// Move every connected piece of a side but its largest to the other side, so a split makes
+/// two connected parts instead of a few slivers (a plane through a curved chart can cut off
+/// small fragments).
+fn keep_sides_connected(graph: &ChartGraph, side: &mut [bool]) {
+    let np = side.len();
+    let mut neighbours: Vec<Vec<u32>> = vec![Vec::new(); np];
+    for p in &graph.edge_polygons {
+        if p[1] != u32::MAX {
+            neighbours[p[0] as usize].push(p[1]);
+            neighbours[p[1] as usize].push(p[0]);
+        }
+    }
+    for pass in 0..2 {
+        let mut comp = vec![u32::MAX; np];
+        let mut sizes: Vec<(usize, bool)> = Vec::new();
+        for s in 0..np {
+            if comp[s] != u32::MAX {
+                continue;
+            }
+            let id = sizes.len() as u32;
+            let mut stack = vec![s];
+            comp[s] = id;
+            let mut n = 0;
+            while let Some(p) = stack.pop() {
+                n += 1;
+                for &q in &neighbours[p] {
+                    let q = q as usize;
+                    if comp[q] == u32::MAX && side[q] == side[s] {
+                        comp[q] = id;
+                        stack.push(q);
+                    }
+                }
+            }
+            sizes.push((n, side[s]));
+        }
+        // Largest component of each side (first one on ties: deterministic).
+        let mut best = [None::<usize>; 2];
+        for (c, &(n, sd)) in sizes.iter().enumerate() {
+            let slot = &mut best[sd as usize];
+            if slot.is_none_or(|b| n > sizes[b].0) {
+                *slot = Some(c);
+            }
+        }
+        let mut changed = false;
+        for p in 0..np {
+            let c = comp[p] as usize;
+            if Some(c) != best[sizes[c].1 as usize] && best[!sizes[c].1 as usize].is_some() {
+                side[p] = !side[p];
+                changed = true;
+            }
+        }
+        if !changed || pass == 1 {
+            break;
+        }
+    }
 }
