@@ -1,7 +1,5 @@
 //! The one-call pipeline: validate, split into charts, map each chart in parallel, measure.
 
-use rayon::prelude::*;
-
 use crate::charts::{build_charts, Chart};
 use crate::error::{Result, UvError};
 use crate::mesh::PolyMesh;
@@ -211,11 +209,7 @@ pub fn unwrap(input: &MeshInput<'_>, options: &UnwrapOptions) -> Result<Unwrappe
         pin_of_corner[c as usize] = Some(uv);
     }
 
-    let solved: Vec<(ChartReport, Option<Vec<[f64; 2]>>)> = charts
-        .par_iter()
-        .enumerate()
-        .map(|(id, chart)| solve_chart(id, chart, &pin_of_corner, options))
-        .collect();
+    let solved = crate::schedule::solve_charts_scheduled(&charts, |id, chart| solve_chart(id, chart, &pin_of_corner, options));
 
     let mut uv = vec![[0.0, 0.0]; n_corners];
     let mut face_chart = vec![-1i32; mesh.n_faces()];
