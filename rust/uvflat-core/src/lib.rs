@@ -22,6 +22,7 @@ pub mod mesh;
 pub mod methods;
 pub mod metrics;
 pub mod solvers;
+mod schedule;
 mod unwrap;
 
 pub use cuts::AutoSeamOptions;

@@ -1,7 +1,5 @@
 //! The one-call pipeline: validate, split into charts, map each chart in parallel, measure.
 
-use rayon::prelude::*;
-
 use crate::charts::{build_charts, Chart};
 use crate::cuts::{self, AutoSeamOptions};
 use crate::error::{Result, UvError};
@@ -226,17 +224,15 @@ pub fn unwrap(input: &MeshInput<'_>, options: &UnwrapOptions) -> Result<Unwrappe
         avoid[v as usize] = true;
     }
     let ctx = Context { mesh: &mesh, pins: &pin_of_corner, options, avoid: &avoid };
-    let pieces: Vec<Vec<Piece>> = charts
-        .par_iter()
-        .map(|chart| {
-            if options.auto_seams.enabled && cuts::needs_cut(chart) {
-                auto_cut(&ctx, chart, input.seams, 0)
-            } else {
-                let (report, uv) = solve_chart(0, chart, &pin_of_corner, options);
-                vec![Piece { chart: None, report, uv, seams: Vec::new() }]
-            }
-        })
-        .collect();
+    // Largest charts first, one per task; results in chart order (see `schedule`).
+    let pieces: Vec<Vec<Piece>> = crate::schedule::solve_charts_scheduled(&charts, |_, chart| {
+        if options.auto_seams.enabled && cuts::needs_cut(chart) {
+            auto_cut(&ctx, chart, input.seams, 0)
+        } else {
+            let (report, uv) = solve_chart(0, chart, &pin_of_corner, options);
+            vec![Piece { chart: None, report, uv, seams: Vec::new() }]
+        }
+    });
 
     let mut uv = vec![[0.0, 0.0]; n_corners];
     let mut face_chart = vec![-1i32; mesh.n_faces()];
