@@ -337,7 +337,9 @@ pub fn solve(
     let solver = FixedValueSolver::new(n, &trip, &ext.outer, symmetry)?;
     let cols = [bnd.iter().map(|p| p[0]).collect::<Vec<_>>(), bnd.iter().map(|p| p[1]).collect::<Vec<_>>()];
     let x = solver.solve(&cols, &[])?;
-    let mut uv: Vec<[f64; 2]> = (0..chart.positions.len()).map(|i| [x[0][i], x[1][i]]).collect();
+    // UVs of every vertex of the extended chart (chart vertices first, then hole centres and
+    // the virtual band): pins index chart vertices, the fixed outer loop may be virtual.
+    let mut uv: Vec<[f64; 2]> = (0..n).map(|i| [x[0][i], x[1][i]]).collect();
     let mut sol = ChartSolution::direct(Vec::new());
     if !pins.is_empty() {
         // Move the whole solution (hence the boundary) onto the pins, then fix both.
@@ -370,7 +372,7 @@ pub fn solve(
         let solver = FixedValueSolver::new(n, &trip, &fixed, symmetry)?;
         let cols = [vals.iter().map(|p| p[0]).collect::<Vec<_>>(), vals.iter().map(|p| p[1]).collect::<Vec<_>>()];
         let x = solver.solve(&cols, &[])?;
-        uv = (0..chart.positions.len()).map(|i| [x[0][i], x[1][i]]).collect();
+        uv = (0..n).map(|i| [x[0][i], x[1][i]]).collect();
         sol.note = Some(format!(
             "{} pinned vertex(es) fixed; the boundary {} was moved onto them by a similarity",
             pins.len(),
@@ -381,6 +383,7 @@ pub fn solve(
             }
         ));
     }
+    uv.truncate(chart.positions.len());
     sol.uv = uv;
     Ok(sol)
 }
