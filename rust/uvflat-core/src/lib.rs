@@ -22,9 +22,11 @@ pub mod methods;
 pub mod metrics;
 pub mod solvers;
 mod unwrap;
+pub mod validate;
 
 pub use error::{Result, UvError};
 pub use factor_timing::factorization_seconds;
 pub use methods::{method_names, BoundaryShape, Method, OptionValue, SpectralOptions};
 pub use metrics::{Distortion, MeshMetrics};
+pub use validate::validate_input;
 pub use unwrap::{unwrap, ChartKind, ChartReport, ChartStatus, Fit, MeshInput, UnwrapOptions, Unwrapped};

@@ -216,7 +216,22 @@ pub fn boundary_positions(positions: &[[f64; 3]], outer: &[u32], shape: Boundary
     }
     let total = acc;
     let t: Vec<f64> = if total > 0.0 {
-        s.iter().map(|x| x / total).collect()
+        // Every gap is at least 1/1000 of the uniform spacing, so coincident or nearly
+        // coincident boundary vertices still get distinct points (and triangles of area > 0).
+        let min_gap = 1e-3 / n as f64;
+        let mut gaps: Vec<f64> = (0..n).map(|i| (if i + 1 < n { s[i + 1] } else { total } - s[i]) / total).collect();
+        for g in gaps.iter_mut() {
+            *g = g.max(min_gap);
+        }
+        let sum: f64 = gaps.iter().sum();
+        let mut acc = 0.0;
+        gaps.iter()
+            .map(|g| {
+                let x = acc;
+                acc += g / sum;
+                x
+            })
+            .collect()
     } else {
         (0..n).map(|i| i as f64 / n as f64).collect()
     };
