@@ -289,3 +289,57 @@ fn fit_to_reads_only_the_selected_faces() {
     input.selected = Some(&selected);
     assert_eq!(unwrap(&input, &o).unwrap_err(), uvflat_core::UvError::NonFiniteUv { corner });
 }
+
+/// A `n × n` grid of quads with z noise, and a selection that punches `(n / spacing)²` square
+/// holes of 2 × 2 faces.
+fn holey_grid(n: usize, spacing: usize, noise: f64) -> (Soup, Vec<bool>) {
+    let mut positions = Vec::new();
+    let mut seed = 12345u64;
+    let mut rnd = || {
+        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        ((seed >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+    };
+    for j in 0..=n {
+        for i in 0..=n {
+            positions.push([i as f64 + noise * rnd(), j as f64 + noise * rnd(), noise * rnd()]);
+        }
+    }
+    let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
+    let mut corner_verts = Vec::new();
+    let mut selected = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            corner_verts.extend([id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)]);
+            let hole = i % spacing >= spacing - 2 && j % spacing >= spacing - 2 && i + 2 < n && j + 2 < n;
+            selected.push(!hole);
+        }
+    }
+    (Soup { positions, corner_verts, face_sizes: vec![4; n * n] }, selected)
+}
+
+#[test]
+fn scaffold_on_a_chart_with_many_holes_converges_or_honestly_falls_back() {
+    use uvflat_core::methods::scaffold::ScaffoldOptions;
+    let (s, selected) = holey_grid(48, 6, 0.3);
+    let holes = selected.iter().filter(|&&x| !x).count() / 4;
+    assert!(holes >= 30, "{holes} holes");
+    let mut input = s.input();
+    input.selected = Some(&selected);
+    let m = Method::Scaffold(ScaffoldOptions { max_iterations: 30, ..Default::default() });
+    let r = unwrap(&input, &opts(m.clone())).unwrap();
+    assert_eq!(r.charts.len(), 1);
+    let c = &r.charts[0];
+    eprintln!("{:?} {} iterations: {:?}", c.status, c.iterations, c.reason);
+    assert_eq!(c.boundary_loops, holes + 1);
+    match c.status {
+        ChartStatus::Solved => {
+            assert!(c.iterations > 0, "solved after 0 iterations: {:?}", c.reason);
+            assert!(!c.reason.as_deref().unwrap_or("").contains("stopped early"), "{:?}", c.reason);
+        }
+        ChartStatus::Fallback => assert!(c.reason.as_deref().unwrap_or("").contains("symmetric Dirichlet"), "{:?}", c.reason),
+        ChartStatus::Failed => panic!("failed: {:?}", c.reason),
+    }
+    assert_eq!(c.flips, 0);
+    assert!(!c.overlap);
+    assert!(finite(&r.uv));
+}
