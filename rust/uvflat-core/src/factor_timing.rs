@@ -3,7 +3,6 @@
 
 use crate::charts::build_charts;
 use crate::error::Result;
-use crate::mesh::PolyMesh;
 use crate::methods::fixed_boundary::{fill_holes, laplacian_triplets, Weights};
 use crate::methods::{chart_angles, lscm, require_disk, Method};
 use crate::solvers::{FixedValueSolver, Symmetry};
@@ -17,8 +16,7 @@ use crate::unwrap::MeshInput;
 /// Returns `None` for methods that are not a single linear solve. Errors: the input validation
 /// errors of [`crate::unwrap`]. Charts that cannot be mapped are skipped.
 pub fn factorization_seconds(input: &MeshInput<'_>, method: &Method) -> Result<Option<f64>> {
-    let mesh = PolyMesh::new(input.positions, input.corner_verts, input.face_sizes)?;
-    mesh.validate_seams(input.seams)?;
+    let mesh = crate::validate::validate_input(input, None, Some(method))?;
     let weights = match method {
         Method::Tutte { .. } => Some(Weights::Uniform),
         Method::Harmonic { .. } => Some(Weights::Cotangent),

@@ -24,10 +24,12 @@ pub mod metrics;
 pub mod solvers;
 mod schedule;
 mod unwrap;
+pub mod validate;
 
 pub use cuts::AutoSeamOptions;
 pub use error::{Result, UvError};
 pub use factor_timing::factorization_seconds;
 pub use methods::{method_names, BoundaryShape, Method, OptionValue, SpectralOptions};
 pub use metrics::{Distortion, MeshMetrics};
+pub use validate::validate_input;
 pub use unwrap::{unwrap, ChartKind, ChartReport, ChartStatus, Fit, MeshInput, UnwrapOptions, Unwrapped};

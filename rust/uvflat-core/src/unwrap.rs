@@ -2,7 +2,7 @@
 
 use crate::charts::{build_charts, Chart};
 use crate::cuts::{self, AutoSeamOptions};
-use crate::error::{Result, UvError};
+use crate::error::Result;
 use crate::mesh::PolyMesh;
 use crate::methods::{self, ChartFailure, Method};
 use crate::metrics::{self, Distortion};
@@ -34,8 +34,10 @@ pub enum Fit {
     #[default]
     AreaScaled,
     /// Fit every unpinned chart (uniform scale, rotation, translation; least squares) onto the
-    /// given per-corner UVs, i.e. keep islands where they were. A chart whose previous UVs are
-    /// degenerate (zero area) is area-scaled and centred on their centroid instead.
+    /// given per-corner UVs, i.e. keep islands where they were. Only the corners of selected
+    /// faces are read (the others may hold anything, NaN included). A chart whose previous UVs
+    /// are degenerate (zero area) or mirrored (no rotation fits: the best one would collapse
+    /// the chart) is area-scaled and centred on them instead, and its report says so.
     Previous(Vec<[f64; 2]>),
 }
 
@@ -164,51 +166,13 @@ impl Unwrapped {
 ///
 /// Preconditions: none beyond the types; every input is validated.
 ///
-/// Errors: a [`UvError`] naming the offending face, corner, vertex, seam or pin for malformed
+/// Errors: a [`crate::UvError`] naming the offending face, corner, vertex, seam or pin for malformed
 /// input. Charts that cannot be mapped (closed, higher genus, singular systems) are *not*
 /// errors: they come back with [`ChartStatus::Failed`] and a reason.
 pub fn unwrap(input: &MeshInput<'_>, options: &UnwrapOptions) -> Result<Unwrapped> {
-    let mesh = PolyMesh::new(input.positions, input.corner_verts, input.face_sizes)?;
+    let mesh = crate::validate::validate_input(input, Some(&options.fit), Some(&options.method))?;
     let n_corners = mesh.n_corners();
-    mesh.validate_seams(input.seams)?;
-    if let Some(sel) = input.selected {
-        if sel.len() != mesh.n_faces() {
-            return Err(UvError::Shape {
-                what: "selected",
-                detail: format!("has {} entries, mesh has {} faces", sel.len(), mesh.n_faces()),
-            });
-        }
-    }
-    for (i, &(c, uv)) in input.pins.iter().enumerate() {
-        if c as usize >= n_corners {
-            return Err(UvError::PinIndex { pin: i, corner: c as u64, n_corners });
-        }
-        if !uv[0].is_finite() || !uv[1].is_finite() {
-            return Err(UvError::NonFinitePin { pin: i, corner: c as usize });
-        }
-    }
-    if let Fit::Previous(prev) = &options.fit {
-        if prev.len() != n_corners {
-            return Err(UvError::Shape {
-                what: "fit_to",
-                detail: format!("has {} UVs, mesh has {} corners", prev.len(), n_corners),
-            });
-        }
-        if let Some(c) = prev.iter().position(|p| !p[0].is_finite() || !p[1].is_finite()) {
-            return Err(UvError::NonFiniteUv { corner: c });
-        }
-    }
-    options.method.validate()?;
     options.auto_seams.validate(input.positions.len())?;
-    if let crate::methods::Method::Abf(o) = &options.method {
-        if !o.angle_sums.is_empty() {
-            let mut corners = vec![0u32; input.positions.len()];
-            for &v in input.corner_verts {
-                corners[v as usize] += 1;
-            }
-            crate::methods::abf::validate_angle_sums(&o.angle_sums, &corners)?;
-        }
-    }
     // Charts run in parallel; inside one chart the sparse factorizations of the sizes met in
     // practice are faster sequential than split across threads.
     faer::set_global_parallelism(faer::Par::Seq);
@@ -309,7 +273,12 @@ fn solve_chart(
     report.iterations = solution.iterations;
     report.residual = solution.residual;
     if pins.is_empty() {
-        place_chart(chart, &mut solution.uv, &options.fit);
+        if let Some(note) = place_chart(chart, &mut solution.uv, &options.fit) {
+            report.reason = Some(match report.reason.take() {
+                Some(r) => format!("{r}; {note}"),
+                None => note,
+            });
+        }
     }
     let m = metrics::chart_metrics(&chart.positions, &chart.triangles, &solution.uv, &chart.boundary_loops);
     report.flips = m.flips;
@@ -319,13 +288,15 @@ fn solve_chart(
     (report, Some(solution.uv))
 }
 
-/// Scale/place an unpinned chart's UVs per [`Fit`].
-fn place_chart(chart: &Chart, uv: &mut [[f64; 2]], fit: &Fit) {
+/// Scale/place an unpinned chart's UVs per [`Fit`]. Returns a note for the report when the
+/// fit onto the previous UVs was degenerate and the chart was area-scaled instead.
+fn place_chart(chart: &Chart, uv: &mut [[f64; 2]], fit: &Fit) -> Option<String> {
     let tris = &chart.triangles;
     match fit {
         Fit::AreaScaled => metrics::area_normalize(&chart.positions, tris, uv, [0.0, 0.0]),
         Fit::Previous(prev) => {
-            // Previous UV per chart vertex: the first corner seen for that vertex.
+            // Previous UV per chart vertex: the first corner seen for that vertex (a chart
+            // holds only corners of selected faces, so nothing else is read).
             let mut target = vec![[f64::NAN; 2]; uv.len()];
             for &(c, v) in chart.corner_vertex.iter() {
                 if target[v as usize][0].is_nan() {
@@ -333,13 +304,16 @@ fn place_chart(chart: &Chart, uv: &mut [[f64; 2]], fit: &Fit) {
                 }
             }
             if !metrics::fit_similarity(uv, &target, tris) {
-                let n = target.len().max(1) as f64;
-                let cx = target.iter().map(|p| p[0]).sum::<f64>() / n;
-                let cy = target.iter().map(|p| p[1]).sum::<f64>() / n;
-                metrics::area_normalize(&chart.positions, tris, uv, [cx, cy]);
+                let seen: Vec<[f64; 2]> = target.iter().copied().filter(|p| !p[0].is_nan()).collect();
+                let (centre, _) = crate::geometry::bounding_frame(&seen);
+                metrics::area_normalize(&chart.positions, tris, uv, centre);
+                return Some(
+                    "the previous UVs admit no rotation-and-scale fit (collapsed or mirrored): area-scaled and centred on them instead".into(),
+                );
             }
         }
     }
+    None
 }
 
 /// One solved chart of the output: an input chart as built, or a piece of it made by

@@ -116,3 +116,44 @@ pub fn local_frame(p: [[f64; 3]; 3]) -> [[f64; 2]; 3] {
     let qy = if ly > 0.0 { dot(e2, y) / ly } else { 0.0 };
     [[0.0, 0.0], [l1, 0.0], [dot(e2, x), qy]]
 }
+
+/// Centre and size of a point set: the middle of its bounding box and its largest half
+/// extent, computed without squaring coordinates (so it never overflows for finite input).
+/// Points are brought to unit size by `(p − centre) / size`. The size is 1 for an empty or
+/// single-point set or non-finite input.
+pub fn bounding_frame<const D: usize>(points: &[[f64; D]]) -> ([f64; D], f64) {
+    let (mut lo, mut hi) = ([f64::INFINITY; D], [f64::NEG_INFINITY; D]);
+    for p in points {
+        for d in 0..D {
+            lo[d] = lo[d].min(p[d]);
+            hi[d] = hi[d].max(p[d]);
+        }
+    }
+    let mut centre = [0.0; D];
+    let mut size = 0.0f64;
+    for d in 0..D {
+        if lo[d] <= hi[d] {
+            // Halves first: hi − lo of two finite values can overflow, their halves cannot.
+            centre[d] = 0.5 * lo[d] + 0.5 * hi[d];
+            size = size.max(0.5 * hi[d] - 0.5 * lo[d]);
+        }
+    }
+    if !(size > 0.0 && size.is_finite() && centre.iter().all(|c| c.is_finite())) {
+        return (if centre.iter().all(|c| c.is_finite()) { centre } else { [0.0; D] }, 1.0);
+    }
+    (centre, size)
+}
+
+/// Points moved and scaled by a [`bounding_frame`]: `(p − centre) / size`.
+pub fn to_unit_frame<const D: usize>(points: &[[f64; D]], centre: [f64; D], size: f64) -> Vec<[f64; D]> {
+    points
+        .iter()
+        .map(|p| {
+            let mut q = [0.0; D];
+            for d in 0..D {
+                q[d] = (p[d] - centre[d]) / size;
+            }
+            q
+        })
+        .collect()
+}

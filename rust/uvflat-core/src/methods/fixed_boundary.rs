@@ -216,7 +216,22 @@ pub fn boundary_positions(positions: &[[f64; 3]], outer: &[u32], shape: Boundary
     }
     let total = acc;
     let t: Vec<f64> = if total > 0.0 {
-        s.iter().map(|x| x / total).collect()
+        // Every gap is at least 1/1000 of the uniform spacing, so coincident or nearly
+        // coincident boundary vertices still get distinct points (and triangles of area > 0).
+        let min_gap = 1e-3 / n as f64;
+        let mut gaps: Vec<f64> = (0..n).map(|i| (if i + 1 < n { s[i + 1] } else { total } - s[i]) / total).collect();
+        for g in gaps.iter_mut() {
+            *g = g.max(min_gap);
+        }
+        let sum: f64 = gaps.iter().sum();
+        let mut acc = 0.0;
+        gaps.iter()
+            .map(|g| {
+                let x = acc;
+                acc += g / sum;
+                x
+            })
+            .collect()
     } else {
         (0..n).map(|i| i as f64 / n as f64).collect()
     };
@@ -337,7 +352,9 @@ pub fn solve(
     let solver = FixedValueSolver::new(n, &trip, &ext.outer, symmetry)?;
     let cols = [bnd.iter().map(|p| p[0]).collect::<Vec<_>>(), bnd.iter().map(|p| p[1]).collect::<Vec<_>>()];
     let x = solver.solve(&cols, &[])?;
-    let mut uv: Vec<[f64; 2]> = (0..chart.positions.len()).map(|i| [x[0][i], x[1][i]]).collect();
+    // UVs of every vertex of the extended chart (chart vertices first, then hole centres and
+    // the virtual band): pins index chart vertices, the fixed outer loop may be virtual.
+    let mut uv: Vec<[f64; 2]> = (0..n).map(|i| [x[0][i], x[1][i]]).collect();
     let mut sol = ChartSolution::direct(Vec::new());
     if !pins.is_empty() {
         // Move the whole solution (hence the boundary) onto the pins, then fix both.
@@ -370,7 +387,7 @@ pub fn solve(
         let solver = FixedValueSolver::new(n, &trip, &fixed, symmetry)?;
         let cols = [vals.iter().map(|p| p[0]).collect::<Vec<_>>(), vals.iter().map(|p| p[1]).collect::<Vec<_>>()];
         let x = solver.solve(&cols, &[])?;
-        uv = (0..chart.positions.len()).map(|i| [x[0][i], x[1][i]]).collect();
+        uv = (0..n).map(|i| [x[0][i], x[1][i]]).collect();
         sol.note = Some(format!(
             "{} pinned vertex(es) fixed; the boundary {} was moved onto them by a similarity",
             pins.len(),
@@ -381,6 +398,7 @@ pub fn solve(
             }
         ));
     }
+    uv.truncate(chart.positions.len());
     sol.uv = uv;
     Ok(sol)
 }

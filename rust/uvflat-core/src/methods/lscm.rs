@@ -219,14 +219,7 @@ pub fn solve(chart: &Chart, pins: &[(u32, [f64; 2])]) -> Result<ChartSolution, C
 /// How much a map of `chart` folds: its flipped or degenerate triangles, and whether a
 /// boundary loop crosses itself or another. Ordered: fewer flips first, then no overlap.
 pub(crate) fn folds(chart: &Chart, uv: &[[f64; 2]]) -> (usize, bool) {
-    let flipped = chart
-        .triangles
-        .iter()
-        .filter(|t| {
-            let (a, b, c) = (uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]);
-            !((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]) > 0.0)
-        })
-        .count();
+    let flipped = crate::metrics::count_flips(&chart.triangles, uv);
     (flipped, crate::metrics::boundary_self_overlap(uv, &chart.boundary_loops))
 }
 

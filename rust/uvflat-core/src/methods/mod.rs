@@ -340,10 +340,36 @@ pub fn require_disk(chart: &Chart) -> std::result::Result<(), ChartFailure> {
     }
 }
 
-/// Map one chart with `method`, honouring `pins` (chart vertex, UV) as the method allows.
-pub fn solve(method: &Method, chart: &Chart, pins: &[(u32, [f64; 2])]) -> std::result::Result<ChartSolution, ChartFailure> {
-    require_disk(chart)?;
-    let sol = match method {
+impl Method {
+    /// Whether the method promises no flipped triangles on an unpinned chart (README's
+    /// "promise" column): Tutte and mean value on the circle or the virtual boundary, ABF on
+    /// disk charts, SLIM, MIPS and scaffold. Pins are the user's constraint and may force
+    /// flips; they are counted in the report then.
+    pub fn promises_no_flips(&self, kind: ChartKind) -> bool {
+        match self {
+            Method::Tutte { boundary } | Method::MeanValue { boundary } => *boundary != BoundaryShape::Square,
+            Method::Abf(_) => kind == ChartKind::Disk,
+            Method::Slim(_) | Method::Mips(_) | Method::Scaffold(_) => true,
+            Method::Harmonic { .. } | Method::Lscm | Method::Spectral(_) | Method::Arap(_) => false,
+        }
+    }
+}
+
+/// The chart in a unit frame: positions moved to the centre of their bounding box and divided
+/// by its largest half extent rounded to a power of two, and the pins divided by the same size
+/// (UV space has no origin to move). A power of two scales exactly, so pinned UVs come back
+/// bit for bit. Returns the moved chart, the pins and the size to multiply the UVs by.
+fn unit_chart(chart: &Chart, pins: &[(u32, [f64; 2])]) -> (Chart, Vec<(u32, [f64; 2])>, f64) {
+    let (centre, size) = crate::geometry::bounding_frame(&chart.positions);
+    let size = 2f64.powi(size.log2().round() as i32);
+    let mut unit = chart.clone();
+    unit.positions = crate::geometry::to_unit_frame(&chart.positions, centre, size);
+    let pins = pins.iter().map(|&(v, p)| (v, [p[0] / size, p[1] / size])).collect();
+    (unit, pins, size)
+}
+
+fn dispatch(method: &Method, chart: &Chart, pins: &[(u32, [f64; 2])]) -> std::result::Result<ChartSolution, ChartFailure> {
+    match method {
         Method::Tutte { boundary } => tutte::solve(chart, pins, *boundary),
         Method::Harmonic { boundary } => harmonic::solve(chart, pins, *boundary),
         Method::MeanValue { boundary } => mean_value::solve(chart, pins, *boundary),
@@ -354,9 +380,89 @@ pub fn solve(method: &Method, chart: &Chart, pins: &[(u32, [f64; 2])]) -> std::r
         Method::Slim(o) => slim::solve(chart, pins, o),
         Method::Mips(o) => mips::solve(chart, pins, o),
         Method::Scaffold(o) => scaffold::solve(chart, pins, o),
-    }?;
+    }
+}
+
+/// What is wrong with a method's UVs, if anything: a non-finite UV, or a flipped triangle
+/// ([`crate::metrics::flipped_triangles`]) from a method that promises none.
+fn defect(chart: &Chart, uv: &[[f64; 2]], promise: bool) -> Option<String> {
+    if let Some(i) = uv.iter().position(|p| !p[0].is_finite() || !p[1].is_finite()) {
+        return Some(format!("the solve produced a non-finite UV at mesh vertex {}", chart.mesh_vertex[i]));
+    }
+    if promise {
+        let flips = crate::metrics::count_flips(&chart.triangles, uv);
+        if flips > 0 {
+            return Some(format!("the map has {flips} flipped or zero-area triangle(s) (degenerate 3D triangles?)"));
+        }
+    }
+    None
+}
+
+/// Map one chart with `method`, honouring `pins` (chart vertex, UV) as the method allows.
+///
+/// The chart is solved in a unit frame (its positions centred and scaled to unit size, pins
+/// scaled alike) and its UVs scaled back, so the result does not depend on the chart's size or
+/// place: any finite coordinates (1e-150 to 1e150 and beyond) give finite UVs.
+///
+/// Near-degenerate 3D triangles (collinear or coincident vertices) get clamped angles (at
+/// least [`crate::geometry::MIN_ANGLE`], see [`crate::geometry::clamped_angles`]) wherever a
+/// method uses angles or cotangents, and floored edge lengths in mean value weights, so every
+/// system stays finite; the result is then checked rather than trusted.
+///
+/// Validity: a result with a non-finite UV, or with a flipped triangle from a method that
+/// promises none on an unpinned chart ([`Method::promises_no_flips`]), is never returned as
+/// solved: the chart falls back to LSCM (methods without a promise; only for a non-finite
+/// result) and then to Tutte's uniform-weight map onto the circle, which depends on the
+/// connectivity alone and cannot flip a triangle of a disk; the fallback's reason says why.
+/// When no candidate gives finite UVs the chart fails with the reason.
+pub fn solve(method: &Method, chart: &Chart, pins: &[(u32, [f64; 2])]) -> std::result::Result<ChartSolution, ChartFailure> {
+    require_disk(chart)?;
+    let (unit, unit_pins, size) = unit_chart(chart, pins);
+    let promise = pins.is_empty() && method.promises_no_flips(chart.kind);
+    let mut sol = dispatch(method, &unit, &unit_pins)?;
+    // A method that already fell back has said why; only its finiteness is checked.
+    if let Some(why) = defect(&unit, &sol.uv, promise && sol.fallback.is_none()) {
+        let tutte = Method::Tutte { boundary: BoundaryShape::Circle };
+        let mut candidates: Vec<Method> = Vec::new();
+        if !promise && !matches!(method, Method::Lscm) {
+            candidates.push(Method::Lscm);
+        }
+        if *method != tutte {
+            candidates.push(tutte);
+        }
+        let mut last = why.clone();
+        let mut found = None;
+        for m in candidates {
+            match dispatch(&m, &unit, &unit_pins) {
+                Ok(s) => match defect(&unit, &s.uv, false) {
+                    None => {
+                        found = Some((m.name(), s));
+                        break;
+                    }
+                    Some(d) => last = format!("{}: {d}", m.name()),
+                },
+                Err(ChartFailure(e)) => last = format!("{}: {e}", m.name()),
+            }
+        }
+        let Some((name, mut s)) = found else {
+            return Err(ChartFailure(if last == why { why } else { format!("{why}; fallback {last}") }));
+        };
+        let flips = crate::metrics::count_flips(&unit.triangles, &s.uv);
+        let mut reason = format!("{} rejected: {why}", method.name());
+        if flips > 0 {
+            reason.push_str(&format!("; the fallback still has {flips} flipped triangle(s)"));
+        }
+        if let Some(note) = s.note.take() {
+            reason.push_str(&format!("; {note}"));
+        }
+        s.fallback = Some(Fallback { method: name, reason });
+        sol = s;
+    }
+    for p in sol.uv.iter_mut() {
+        *p = [p[0] * size, p[1] * size];
+    }
     if let Some(i) = sol.uv.iter().position(|p| !p[0].is_finite() || !p[1].is_finite()) {
-        return Err(ChartFailure(format!("the solve produced a non-finite UV at mesh vertex {}", chart.mesh_vertex[i])));
+        return Err(ChartFailure(format!("the UVs overflow at mesh vertex {} when scaled back to the chart's size", chart.mesh_vertex[i])));
     }
     Ok(sol)
 }

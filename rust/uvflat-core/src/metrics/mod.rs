@@ -13,7 +13,6 @@
 use crate::charts::build_charts;
 use crate::error::{Result, UvError};
 use crate::geometry::{cross2, local_frame, signed_area_2d, triangle_area};
-use crate::mesh::PolyMesh;
 
 /// Area-weighted distortion measures (1 is perfect).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -75,14 +74,49 @@ pub fn singular_values_2x2(a: f64, b: f64, c: f64, d: f64) -> (f64, f64, f64) {
     (q + r, (q - r).abs(), det.signum())
 }
 
-/// Whether a UV triangle is degenerate (its area is at round-off level of its edges).
-#[inline]
-pub fn uv_degenerate(q: [[f64; 2]; 3]) -> bool {
-    let e1 = [q[1][0] - q[0][0], q[1][1] - q[0][1]];
-    let e2 = [q[2][0] - q[0][0], q[2][1] - q[0][1]];
-    let c = cross2(e1, e2).abs();
-    let l = (e1[0].hypot(e1[1])) * (e2[0].hypot(e2[1]));
-    c <= 1e-12 * l || l == 0.0
+/// Relative tolerance of [`flipped_triangles`]: a UV triangle whose area is at most this
+/// times the square of its chart's UV bounding-box diagonal counts as zero-area.
+///
+/// The round-off of a signed area computed from coordinates of size diag is a few 1e-16 ·
+/// diag², so below 1e-15 · diag² a sign means nothing. Larger values would call valid
+/// triangles degenerate: real meshes have well-shaped UV triangles of 6e-12 · diag²
+/// (camelhead) and 5e-15 · diag² (alligator with ABF's convex boundary).
+pub const ZERO_AREA_RELATIVE: f64 = 1e-15;
+
+/// The one flip definition (DESIGN.md): triangle `t` is flipped when its signed UV area is at
+/// most [`ZERO_AREA_RELATIVE`] · diag² in absolute value (diag: the diagonal of the bounding box
+/// of the chart's UVs, so the test does not depend on the chart's scale), or when its sign is
+/// opposite to the majority of the chart's triangles (positive wins a tie). Non-finite UVs
+/// count as flipped. Used by the reports, [`measure`] and the methods' own "no flips" checks.
+pub fn flipped_triangles(triangles: &[[u32; 3]], uv: &[[f64; 2]]) -> Vec<bool> {
+    let used: Vec<[f64; 2]> = triangles.iter().flat_map(|t| t.iter().map(|&v| uv[v as usize])).collect();
+    let (centre, size) = crate::geometry::bounding_frame(&used);
+    // In the unit frame the bounding box's diagonal is at most 2√2, at least 2.
+    let (lo, hi) = used.iter().fold(([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]), |(lo, hi), p| {
+        let q = [(p[0] - centre[0]) / size, (p[1] - centre[1]) / size];
+        ([lo[0].min(q[0]), lo[1].min(q[1])], [hi[0].max(q[0]), hi[1].max(q[1])])
+    });
+    let diag2 = if lo[0] <= hi[0] { (hi[0] - lo[0]).powi(2) + (hi[1] - lo[1]).powi(2) } else { 0.0 };
+    let eps = ZERO_AREA_RELATIVE * diag2;
+    let areas: Vec<f64> = triangles
+        .iter()
+        .map(|t| {
+            let q = t.map(|v| {
+                let p = uv[v as usize];
+                [(p[0] - centre[0]) / size, (p[1] - centre[1]) / size]
+            });
+            signed_area_2d(q)
+        })
+        .collect();
+    let pos = areas.iter().filter(|&&a| a > eps).count();
+    let neg = areas.iter().filter(|&&a| a < -eps).count();
+    let majority = if neg > pos { -1.0 } else { 1.0 };
+    areas.iter().map(|&a| !(a * majority > eps)).collect()
+}
+
+/// Number of [`flipped_triangles`].
+pub fn count_flips(triangles: &[[u32; 3]], uv: &[[f64; 2]]) -> usize {
+    flipped_triangles(triangles, uv).iter().filter(|&&f| f).count()
 }
 
 /// Measure one chart given per-vertex positions and UVs over its triangles.
@@ -92,33 +126,27 @@ pub fn chart_metrics(
     uv: &[[f64; 2]],
     boundary_loops: &[Vec<u32>],
 ) -> ChartMetrics {
+    // Measure in unit frames (distortion is scale-invariant), so charts of any size give the
+    // same numbers and no product of coordinates overflows or underflows.
+    let (c3, s3) = crate::geometry::bounding_frame(positions);
+    let positions = &crate::geometry::to_unit_frame(positions, c3, s3);
+    let (c2, s2) = crate::geometry::bounding_frame(uv);
+    let uv = &crate::geometry::to_unit_frame(uv, c2, s2);
     let get3 = |t: &[u32; 3]| [positions[t[0] as usize], positions[t[1] as usize], positions[t[2] as usize]];
     let get2 = |t: &[u32; 3]| [uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]];
+    let flipped = flipped_triangles(triangles, uv);
     let mut area3 = 0.0;
     let mut area2 = 0.0;
-    let mut pos = 0usize;
-    let mut neg = 0usize;
     for t in triangles {
         area3 += triangle_area(get3(t));
-        let a = signed_area_2d(get2(t));
-        area2 += a.abs();
-        if a > 0.0 {
-            pos += 1;
-        } else if a < 0.0 {
-            neg += 1;
-        }
+        area2 += signed_area_2d(get2(t)).abs();
     }
-    let majority = if neg > pos { -1.0 } else { 1.0 };
     let scale = if area2 > 0.0 { (area3 / area2).sqrt() } else { 1.0 };
-    let mut flips = 0usize;
+    let flips = flipped.iter().filter(|&&f| f).count();
     let mut sum = [0.0f64; 3];
-    for t in triangles {
+    for (t, &bad) in triangles.iter().zip(&flipped) {
         let q2 = get2(t);
-        let a = signed_area_2d(q2);
-        let degenerate = uv_degenerate(q2);
-        if degenerate || a * majority < 0.0 {
-            flips += 1;
-        }
+        let degenerate = bad && uv_zero_area(q2);
         let p = get3(t);
         let w = triangle_area(p);
         if w <= 0.0 || area3 <= 0.0 {
@@ -161,8 +189,16 @@ pub fn chart_metrics(
         flips,
         overlap,
         distortion: Distortion { conformal: sum[0], area: sum[1], symmetric_dirichlet: sum[2] },
-        area_3d: area3,
+        // Back to the input's units; overflows to +∞ only beyond ~1e154 per coordinate.
+        area_3d: area3 * s3 * s3,
     }
+}
+
+/// Whether a UV triangle (in a unit frame) has zero area by [`flipped_triangles`]' tolerance
+/// (the bounding-box diagonal of a unit frame is at least 2, so the tolerance is at least
+/// 4 · [`ZERO_AREA_RELATIVE`]): such a triangle makes the distortion measures infinite.
+fn uv_zero_area(q: [[f64; 2]; 3]) -> bool {
+    signed_area_2d(q).abs() <= 4.0 * ZERO_AREA_RELATIVE
 }
 
 /// Whether the UV boundary (all loops of one chart) crosses or touches itself anywhere other
@@ -266,88 +302,135 @@ pub fn segments_intersect(p1: [f64; 2], p2: [f64; 2], p3: [f64; 2], p4: [f64; 2]
 }
 
 /// Scale a chart's UVs so its UV area equals its 3D area and centre its bounding box on
-/// `center`. A chart with zero UV area is only translated.
+/// `center`. A chart with zero UV area is only translated. Computed in unit frames, so charts
+/// of any size (coordinates up to ~1e300) give finite UVs.
 pub fn area_normalize(positions: &[[f64; 3]], triangles: &[[u32; 3]], uv: &mut [[f64; 2]], center: [f64; 2]) {
+    let (c3, s3) = crate::geometry::bounding_frame(positions);
+    let (mid, s2) = crate::geometry::bounding_frame(uv);
+    let p3 = crate::geometry::to_unit_frame(positions, c3, s3);
     let mut a3 = 0.0;
     let mut a2 = 0.0;
     for t in triangles {
-        a3 += triangle_area([positions[t[0] as usize], positions[t[1] as usize], positions[t[2] as usize]]);
-        a2 += signed_area_2d([uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]]).abs();
+        a3 += triangle_area([p3[t[0] as usize], p3[t[1] as usize], p3[t[2] as usize]]);
+        let q = t.map(|v| [(uv[v as usize][0] - mid[0]) / s2, (uv[v as usize][1] - mid[1]) / s2]);
+        a2 += signed_area_2d(q).abs();
     }
-    let s = if a2 > 0.0 && a3 > 0.0 { (a3 / a2).sqrt() } else { 1.0 };
-    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    for p in uv.iter() {
-        lo = [lo[0].min(p[0]), lo[1].min(p[1])];
-        hi = [hi[0].max(p[0]), hi[1].max(p[1])];
-    }
-    let mid = [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])];
+    // UV = centre + k (uv − mid) / s2: k = s3 √(a3 / a2) in unit frames, s2 when not scaling.
+    let k = if a2 > 0.0 && a3 > 0.0 { s3 * (a3 / a2).sqrt() } else { s2 };
     for p in uv.iter_mut() {
-        *p = [center[0] + s * (p[0] - mid[0]), center[1] + s * (p[1] - mid[1])];
+        *p = [center[0] + k * ((p[0] - mid[0]) / s2), center[1] + k * ((p[1] - mid[1]) / s2)];
     }
 }
 
-/// Least-squares similarity (uniform scale, rotation, translation; no reflection) taking `uv`
-/// onto `target` (per vertex; NaN targets are ignored), applied in place.
+/// Smallest agreement (0..1, see [`fit_similarity`]) between a chart's UVs and its fit target
+/// for the fit to count: a mirrored target has about 0 (the best rotation collapses the chart).
+pub const MIN_FIT_AGREEMENT: f64 = 0.5;
+
+/// The best proper similarity (uniform scale, rotation, translation; no reflection) from the
+/// points `uv` onto `target` (NaN targets ignored), in least squares: `p ↦ mt + z (p − ms)`
+/// with complex `z`, and the agreement |Σ conj(a) b| / √(Σ|a|² Σ|b|²) ∈ [0, 1] of the centred
+/// point sets a, b (1 for an exact similarity, about 0 for a mirror image). Computed in unit
+/// frames, so any finite coordinates work. `None` when fewer than two distinct points take part.
+struct Similarity {
+    ms: [f64; 2],
+    ss: f64,
+    mt: [f64; 2],
+    z: [f64; 2],
+    agreement: f64,
+}
+
+fn best_similarity(uv: &[[f64; 2]], target: &[[f64; 2]]) -> Option<Similarity> {
+    let pairs: Vec<([f64; 2], [f64; 2])> = uv.iter().zip(target).filter(|(_, t)| !t[0].is_nan()).map(|(s, t)| (*s, *t)).collect();
+    if pairs.is_empty() {
+        return None;
+    }
+    let src: Vec<[f64; 2]> = pairs.iter().map(|p| p.0).collect();
+    let dst: Vec<[f64; 2]> = pairs.iter().map(|p| p.1).collect();
+    let (cs, ss) = crate::geometry::bounding_frame(&src);
+    let (ct, st) = crate::geometry::bounding_frame(&dst);
+    let src = crate::geometry::to_unit_frame(&src, cs, ss);
+    let dst = crate::geometry::to_unit_frame(&dst, ct, st);
+    let n = src.len() as f64;
+    let mean = |v: &[[f64; 2]]| v.iter().fold([0.0; 2], |m, p| [m[0] + p[0] / n, m[1] + p[1] / n]);
+    let (ms, mt) = (mean(&src), mean(&dst));
+    // Complex least squares: t − mt ≈ z (s − ms), z = Σ conj(s')t' / Σ |s'|².
+    let (mut re, mut im, mut den, mut tt) = (0.0, 0.0, 0.0, 0.0);
+    for (s, t) in src.iter().zip(&dst) {
+        let a = [s[0] - ms[0], s[1] - ms[1]];
+        let b = [t[0] - mt[0], t[1] - mt[1]];
+        re += a[0] * b[0] + a[1] * b[1];
+        im += a[0] * b[1] - a[1] * b[0];
+        den += a[0] * a[0] + a[1] * a[1];
+        tt += b[0] * b[0] + b[1] * b[1];
+    }
+    if !(den > 0.0) {
+        return None;
+    }
+    let agreement = if tt > 0.0 { re.hypot(im) / (den * tt).sqrt() } else { 0.0 };
+    // Back to input units: p ↦ ct + st (mt + z ((p − cs)/ss − ms)).
+    Some(Similarity {
+        ms: [cs[0] + ss * ms[0], cs[1] + ss * ms[1]],
+        ss,
+        mt: [ct[0] + st * mt[0], ct[1] + st * mt[1]],
+        z: [st * re / den, st * im / den],
+        agreement,
+    })
+}
+
+impl Similarity {
+    fn apply(&self, uv: &mut [[f64; 2]]) {
+        let [zr, zi] = self.z;
+        for p in uv.iter_mut() {
+            let a = [(p[0] - self.ms[0]) / self.ss, (p[1] - self.ms[1]) / self.ss];
+            *p = [self.mt[0] + zr * a[0] - zi * a[1], self.mt[1] + zi * a[0] + zr * a[1]];
+        }
+    }
+}
+
+/// Least-squares proper similarity (uniform scale, rotation, translation; no reflection)
+/// taking `uv` onto `target` (per vertex; NaN targets are ignored), applied in place.
 ///
-/// Returns `false` and leaves `uv` unchanged when the target is degenerate (its triangles have
-/// no area, so there is no place to fit to).
+/// Returns `false` and leaves `uv` unchanged when the fit is degenerate: the target's triangles
+/// have no area, or the best proper similarity agrees poorly with the target (agreement below
+/// [`MIN_FIT_AGREEMENT`], as for a mirrored target, where it would shrink the chart to a
+/// point). The caller then places the chart some other way.
 pub fn fit_similarity(uv: &mut [[f64; 2]], target: &[[f64; 2]], triangles: &[[u32; 3]]) -> bool {
+    let used: Vec<[f64; 2]> = triangles.iter().flat_map(|t| t.map(|v| target[v as usize])).filter(|p| !p[0].is_nan()).collect();
+    let (ct, st) = crate::geometry::bounding_frame(&used);
     let target_area: f64 = triangles
         .iter()
         .map(|t| {
-            let q = [target[t[0] as usize], target[t[1] as usize], target[t[2] as usize]];
+            let q = t.map(|v| target[v as usize]);
             if q.iter().any(|p| p[0].is_nan()) {
                 0.0
             } else {
-                signed_area_2d(q).abs()
+                signed_area_2d(q.map(|p| [(p[0] - ct[0]) / st, (p[1] - ct[1]) / st])).abs()
             }
         })
         .sum();
-    if !(target_area > 1e-30) {
+    if !(target_area > 1e-24) {
         return false;
     }
-    fit_similarity_points(uv, target)
+    match best_similarity(uv, target) {
+        Some(sim) if sim.agreement >= MIN_FIT_AGREEMENT => {
+            sim.apply(uv);
+            true
+        }
+        _ => false,
+    }
 }
 
 /// Least-squares similarity (no reflection) taking `uv` onto `target` at the vertices whose
 /// target is not NaN, applied in place. Returns `false` (and changes nothing) when fewer than
 /// two distinct points take part.
 pub fn fit_similarity_points(uv: &mut [[f64; 2]], target: &[[f64; 2]]) -> bool {
-    let (mut n, mut ms, mut mt) = (0.0, [0.0; 2], [0.0; 2]);
-    for (s, t) in uv.iter().zip(target) {
-        if t[0].is_nan() {
-            continue;
+    match best_similarity(uv, target) {
+        Some(sim) => {
+            sim.apply(uv);
+            true
         }
-        n += 1.0;
-        ms = [ms[0] + s[0], ms[1] + s[1]];
-        mt = [mt[0] + t[0], mt[1] + t[1]];
+        None => false,
     }
-    if n == 0.0 {
-        return false;
-    }
-    ms = [ms[0] / n, ms[1] / n];
-    mt = [mt[0] / n, mt[1] / n];
-    // Complex least squares: t - mt ≈ z (s - ms), z = Σ conj(s')t' / Σ |s'|².
-    let (mut re, mut im, mut den) = (0.0, 0.0, 0.0);
-    for (s, t) in uv.iter().zip(target) {
-        if t[0].is_nan() {
-            continue;
-        }
-        let a = [s[0] - ms[0], s[1] - ms[1]];
-        let b = [t[0] - mt[0], t[1] - mt[1]];
-        re += a[0] * b[0] + a[1] * b[1];
-        im += a[0] * b[1] - a[1] * b[0];
-        den += a[0] * a[0] + a[1] * a[1];
-    }
-    if !(den > 0.0) {
-        return false;
-    }
-    let (zr, zi) = (re / den, im / den);
-    for p in uv.iter_mut() {
-        let a = [p[0] - ms[0], p[1] - ms[1]];
-        *p = [mt[0] + zr * a[0] - zi * a[1], mt[1] + zi * a[0] + zr * a[1]];
-    }
-    true
 }
 
 /// Measure an existing per-corner UV map of a polygon mesh (for example Blender's own unwrap).
@@ -355,8 +438,8 @@ pub fn fit_similarity_points(uv: &mut [[f64; 2]], target: &[[f64; 2]]) -> bool {
 /// Islands are the faces connected through edges whose two faces have equal UVs at both ends;
 /// non-manifold edges separate islands. `selected` restricts the measurement to some faces.
 ///
-/// Errors: the mesh validation errors of [`PolyMesh::new`], [`UvError::Shape`] for a wrong
-/// number of UVs or selection flags, [`UvError::NonFiniteUv`] for NaN or infinite UVs.
+/// Errors: the mesh validation errors of [`crate::validate::validate_input`], [`UvError::Shape`] for a wrong
+/// number of UVs or selection flags, [`UvError::NonFiniteUv`] for NaN or infinite UVs on a measured face.
 pub fn measure(
     positions: &[[f64; 3]],
     corner_verts: &[u32],
@@ -364,23 +447,22 @@ pub fn measure(
     uv: &[[f64; 2]],
     selected: Option<&[bool]>,
 ) -> Result<MeshMetrics> {
-    let mesh = PolyMesh::new(positions, corner_verts, face_sizes)?;
+    let input = crate::unwrap::MeshInput { positions, corner_verts, face_sizes, seams: &[], selected, pins: &[] };
+    let mesh = crate::validate::validate_input(&input, None, None)?;
     if uv.len() != mesh.n_corners() {
         return Err(UvError::Shape {
             what: "uv",
             detail: format!("has {} rows, mesh has {} corners", uv.len(), mesh.n_corners()),
         });
     }
-    if let Some(s) = selected {
-        if s.len() != mesh.n_faces() {
-            return Err(UvError::Shape {
-                what: "selected",
-                detail: format!("has {} entries, mesh has {} faces", s.len(), mesh.n_faces()),
-            });
+    // Only the corners of measured faces are read: the others may hold anything.
+    for f in 0..mesh.n_faces() {
+        if selected.is_some_and(|s| !s[f]) {
+            continue;
         }
-    }
-    if let Some(c) = uv.iter().position(|p| !p[0].is_finite() || !p[1].is_finite()) {
-        return Err(UvError::NonFiniteUv { corner: c });
+        if let Some(c) = mesh.face_corners(f).find(|&c| !uv[c][0].is_finite() || !uv[c][1].is_finite()) {
+            return Err(UvError::NonFiniteUv { corner: c });
+        }
     }
     // UV seams: edges whose two corners' UVs differ at either end.
     let mut face_of = vec![0u32; mesh.n_corners()];
