@@ -69,7 +69,9 @@ def test_closed_cube_unwraps_every_face_with_every_method(method):
     assert seams.dtype == np.uint32 and seams.ndim == 2 and seams.shape[1] == 2 and len(seams) > 0
     assert np.all(seams[:, 0] < seams[:, 1])
     assert {tuple(map(int, s)) for s in seams} <= mesh_edges(cv, fs), "a new seam is not a mesh edge"
-    assert sum(c.cones for c in r.charts) >= 2
+    # Cut through at least two cones, or split into pieces when cones were not enough
+    # (a fixed-boundary method stretches a cube's single disk beyond the area bound).
+    assert sum(c.cones for c in r.charts) >= 2 or len(r.charts) > 1
     assert sum(c.cut_length for c in r.charts) > 0
     for c in r.charts:
         assert c.kind == "disk"

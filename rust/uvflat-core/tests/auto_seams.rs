@@ -312,21 +312,35 @@ const CLOSED: &[(&str, usize)] =
 
 #[test]
 fn shared_closed_meshes_unwrap_completely() {
-    let Some(dir) = shared_meshes() else { return };
-    let methods = [
+    shared_closed(&[
         Method::Abf(abf::AbfOptions::default()),
         Method::Lscm,
         Method::Slim(slim::SlimOptions::default()),
         Method::Scaffold(scaffold::ScaffoldOptions::default()),
         Method::MeanValue { boundary: BoundaryShape::Circle },
-    ];
+    ]);
+}
+
+#[test]
+fn shared_closed_meshes_unwrap_completely_with_the_other_methods() {
+    shared_closed(&[
+        Method::Tutte { boundary: BoundaryShape::Circle },
+        Method::Harmonic { boundary: BoundaryShape::Circle },
+        Method::Spectral(Default::default()),
+        Method::Arap(Default::default()),
+        Method::Mips(mips::MipsOptions::default()),
+    ]);
+}
+
+fn shared_closed(methods: &[Method]) {
+    let Some(dir) = shared_meshes() else { return };
     for &(f, genus) in CLOSED {
         let s = load(&dir.join(f));
         let mesh = PolyMesh::new(&s.positions, &s.corner_verts, &s.face_sizes).unwrap();
         let charts = build_charts(&mesh, &[], None);
         let main = charts.iter().max_by_key(|c| c.faces.len()).unwrap();
         assert_eq!(main.genus, genus, "{f}");
-        for m in &methods {
+        for m in methods {
             let t = std::time::Instant::now();
             let r = unwrap(&s.input(), &opts(m.clone())).unwrap();
             let cones: usize = r.charts.iter().map(|c| c.cones).sum();
