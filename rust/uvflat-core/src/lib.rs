@@ -20,6 +20,7 @@ pub mod geometry;
 pub mod mesh;
 pub mod methods;
 pub mod metrics;
+pub mod progress;
 pub mod solvers;
 mod unwrap;
 
@@ -27,4 +28,5 @@ pub use error::{Result, UvError};
 pub use factor_timing::factorization_seconds;
 pub use methods::{method_names, BoundaryShape, Method, OptionValue, SpectralOptions};
 pub use metrics::{Distortion, MeshMetrics};
+pub use progress::Progress;
 pub use unwrap::{unwrap, ChartKind, ChartReport, ChartStatus, Fit, MeshInput, UnwrapOptions, Unwrapped};

@@ -2,11 +2,12 @@
 
 use rayon::prelude::*;
 
-use crate::charts::{build_charts, Chart};
+use crate::charts::{build_charts_counting, Chart};
 use crate::error::{Result, UvError};
 use crate::mesh::PolyMesh;
 use crate::methods::{self, ChartFailure, Method};
 use crate::metrics::{self, Distortion};
+use crate::progress::Progress;
 
 /// Polygon soup with everything an unwrap reads from the user's mesh.
 ///
@@ -47,6 +48,9 @@ pub struct UnwrapOptions {
     pub method: Method,
     /// Placement of the solved charts. Default: [`Fit::AreaScaled`].
     pub fit: Fit,
+    /// Progress callback and cancel flag, polled between charts and between iterations of
+    /// the iterative methods. Default: none.
+    pub progress: Option<Progress>,
 }
 
 /// Topological class of a chart, from its Euler characteristic and boundary loops.
@@ -133,6 +137,31 @@ pub struct ChartReport {
     pub seconds: f64,
 }
 
+impl ChartReport {
+    /// Stable code of the chart's outcome, for programs (the prose `reason` is for people):
+    /// `"solved"`, `"solved_with_note"` (e.g. how pins were honoured), `"fallback"`,
+    /// `"failed_closed"` (a closed surface: no boundary to open it along), `"failed_genus"`
+    /// (handles: seams must cut them), `"failed_defect"` (non-orientable or a non-manifold
+    /// vertex inside the chart), `"failed_solver"` (the method could not map a disk-like
+    /// chart).
+    pub fn reason_code(&self) -> &'static str {
+        match (self.status, self.kind) {
+            (ChartStatus::Solved, _) if self.reason.is_none() => "solved",
+            (ChartStatus::Solved, _) => "solved_with_note",
+            (ChartStatus::Fallback, _) => "fallback",
+            (ChartStatus::Failed, ChartKind::Closed) => "failed_closed",
+            (ChartStatus::Failed, ChartKind::HigherGenus) => "failed_genus",
+            (ChartStatus::Failed, _) if self.reason.as_deref().is_some_and(is_defect) => "failed_defect",
+            (ChartStatus::Failed, _) => "failed_solver",
+        }
+    }
+}
+
+/// Whether a failure reason is a chart defect found while building charts.
+fn is_defect(reason: &str) -> bool {
+    reason.contains("non-orientable") || reason.contains("non-manifold")
+}
+
 /// Result of [`unwrap`].
 #[derive(Debug, Clone)]
 pub struct Unwrapped {
@@ -143,6 +172,9 @@ pub struct Unwrapped {
     pub face_chart: Vec<i32>,
     /// One report per chart, indexed by chart id.
     pub charts: Vec<ChartReport>,
+    /// Edges of the selection used by three or more selected faces; each was treated as a
+    /// seam (a mesh with many of them is shredded into many small charts).
+    pub non_manifold_edges: usize,
 }
 
 impl Unwrapped {
@@ -205,17 +237,37 @@ pub fn unwrap(input: &MeshInput<'_>, options: &UnwrapOptions) -> Result<Unwrappe
     // practice are faster sequential than split across threads.
     faer::set_global_parallelism(faer::Par::Seq);
 
-    let charts = build_charts(&mesh, input.seams, input.selected);
+    let (charts, non_manifold_edges) = build_charts_counting(&mesh, input.seams, input.selected);
     let mut pin_of_corner: Vec<Option<[f64; 2]>> = vec![None; n_corners];
     for &(c, uv) in input.pins {
         pin_of_corner[c as usize] = Some(uv);
     }
 
-    let solved: Vec<(ChartReport, Option<Vec<[f64; 2]>>)> = charts
+    // With a Progress: charts after a cancel are skipped (None), and the unwrap is an error.
+    let total = charts.len();
+    if let Some(p) = &options.progress {
+        p.start(total);
+    }
+    let solved: Vec<Option<(ChartReport, Option<Vec<[f64; 2]>>)>> = charts
         .par_iter()
         .enumerate()
-        .map(|(id, chart)| solve_chart(id, chart, &pin_of_corner, options))
+        .map(|(id, chart)| match &options.progress {
+            None => Some(solve_chart(id, chart, &pin_of_corner, options)),
+            Some(p) if p.is_cancelled() => None,
+            Some(p) => {
+                let out = {
+                    let _guard = p.enter();
+                    solve_chart(id, chart, &pin_of_corner, options)
+                };
+                p.chart_done();
+                Some(out)
+            }
+        })
         .collect();
+    if let Some(p) = options.progress.as_ref().filter(|p| p.is_cancelled()) {
+        return Err(UvError::Cancelled { charts_done: p.charts_done(), charts_total: total });
+    }
+    let solved = solved.into_iter().flatten();
 
     let mut uv = vec![[0.0, 0.0]; n_corners];
     let mut face_chart = vec![-1i32; mesh.n_faces()];
@@ -231,7 +283,7 @@ pub fn unwrap(input: &MeshInput<'_>, options: &UnwrapOptions) -> Result<Unwrappe
         }
         reports.push(report);
     }
-    Ok(Unwrapped { uv, face_chart, charts: reports })
+    Ok(Unwrapped { uv, face_chart, charts: reports, non_manifold_edges })
 }
 
 fn solve_chart(

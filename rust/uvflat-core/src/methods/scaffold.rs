@@ -574,6 +574,9 @@ fn run(
     let mut iterations = 0;
     let mut stop_note: Option<String> = None;
     for _ in 0..options.max_iterations {
+        if crate::progress::cancelled() {
+            break; // the unwrap discards this chart
+        }
         let t0 = Instant::now();
         // Scaffold: the Delaunay re-mesh of the free space around the current map (SCAF), unless
         // it would need a new symbolic analysis while the previous scaffold neither limited the
