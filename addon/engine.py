@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 import bpy
 import numpy as np
 
-from . import distortion, mesh_io
+from . import aspect, distortion, mesh_io
 
 
 # Summary of the last successful run (for batch scripts and tests).
@@ -156,6 +156,7 @@ class _Job:
     raw_selected: np.ndarray | None = None
     seams: np.ndarray | None = None  # (S,2) seam vertex pairs
     quality: dict | None = None      # distortion attributes as they were before writing
+    aspect: float = 1.0              # width / height of the texture (correct aspect)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -245,11 +246,19 @@ def _write(job: _Job, core):
     solved = np.asarray(job.result.face_solved, dtype=bool) & job.selected
     corners = np.repeat(solved, job.face_sizes)
     new_uv[corners] = np.asarray(job.result.uv)[corners]
+    # per-face quality, measured independently of the solver in texture pixels (before the
+    # aspect correction; packing moves islands by similarities only, which changes none of it)
+    quality = distortion.measure(core, job, new_uv, solved)
+    if job.aspect != 1.0:
+        chart = np.asarray(job.result.chart, dtype=np.int64)
+        free = solved.copy()
+        if len(job.pins):  # pinned UVs stay exactly where they are
+            free &= ~np.isin(chart, chart[mesh_io.corner_faces(job.face_sizes)[job.pins]])
+        aspect.correct(new_uv, np.repeat(free, job.face_sizes), np.repeat(chart, job.face_sizes),
+                       job.aspect)
     mesh_io.write_uv(mesh, job.uv_name, new_uv)
-    # per-face quality, measured independently of the solver (packing moves islands by
-    # similarities only, which changes none of these measures)
     job.quality = distortion.snapshot(mesh)
-    distortion.write(mesh, job.face_sizes, solved, *distortion.measure(core, job, new_uv, solved))
+    distortion.write(mesh, job.face_sizes, solved, *quality)
     mesh.update()
 
 
@@ -381,8 +390,9 @@ class Run:
     selection exactly as :meth:`prepare` found them.
     """
 
-    def __init__(self, method, options, pack: PackSettings):
+    def __init__(self, method, options, pack: PackSettings, correct_aspect=True):
         self.method = method
+        self.correct_aspect = correct_aspect
         self.options = dict(options)
         self.pack = pack
         self.jobs: list[_Job] = []
@@ -417,6 +427,8 @@ class Run:
             for obj in objects:
                 job = _read(obj)
                 if job.selected.any():
+                    if self.correct_aspect:
+                        job.aspect = aspect.image_aspect(context, obj)
                     self.jobs.append(job)
             if not self.jobs:
                 raise UnwrapError("no faces selected")
@@ -562,12 +574,14 @@ def estimated_seconds(method, faces) -> float:
     return faces * _SECONDS_PER_FACE.get(method, 5e-5)
 
 
-def unwrap_edit_objects(context, method, options, *, pack: PackSettings | None = None) -> Summary:
+def unwrap_edit_objects(context, method, options, *, pack: PackSettings | None = None,
+                        correct_aspect=True) -> Summary:
     """Unwrap the selected faces of every mesh object in edit mode; see the module docstring.
 
     ``pack``: how the new islands are packed (default :class:`PackSettings`: around the
-    other islands)."""
-    run = Run(method, options, PackSettings() if pack is None else pack)
+    other islands). ``correct_aspect``: scale the new islands for the texture's aspect ratio
+    (see ``aspect.py``)."""
+    run = Run(method, options, PackSettings() if pack is None else pack, correct_aspect)
     run.prepare(context, stay_out=True)
     try:
         run.solve()

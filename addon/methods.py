@@ -169,6 +169,13 @@ def common_properties() -> dict[str, Any]:
                                   "(islands without previous UVs are packed around the others)")),
             default="AROUND",
         ),
+        "correct_aspect": BoolProperty(
+            name="Correct Aspect",
+            description="Scale the new islands for a non-square texture (the UV editor's "
+                        "image, else the active material's image texture), as Blender's "
+                        "Unwrap does",
+            default=True,
+        ),
         # Blender's own defaults of uv.pack_islands for the three below
         "rotate": BoolProperty(
             name="Rotate",
@@ -233,6 +240,7 @@ def draw_settings(layout, props) -> None:
     layout.prop(props, "method")
     for key in METHOD_BY_ID[props.method].options:
         layout.prop(props, key)
+    layout.prop(props, "correct_aspect")
     layout.prop(props, "pack")
     col = layout.column()
     col.active = props.pack != "OFF"

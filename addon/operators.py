@@ -54,6 +54,7 @@ class UV_OT_uvflat_unwrap(bpy.types.Operator):
                 self.method,
                 methods.core_options(self),
                 pack=engine.PackSettings(**methods.pack_settings(self)),
+                correct_aspect=self.correct_aspect,
             )
         except engine.UnwrapError as ex:
             self.report({"ERROR"}, f"uvflat: {ex}")
@@ -69,7 +70,7 @@ class UV_OT_uvflat_unwrap(bpy.types.Operator):
     def start_modal(self, context):
         engine.LAST_SUMMARY = None
         run = engine.Run(self.method, methods.core_options(self),
-                         engine.PackSettings(**methods.pack_settings(self)))
+                         engine.PackSettings(**methods.pack_settings(self)), self.correct_aspect)
         try:
             run.prepare(context)
         except engine.UnwrapError as ex:

@@ -89,6 +89,8 @@ def parse_args(argv):
     parser.add_argument("--shape-method", choices=("concave", "convex", "aabb"),
                         default="concave", help="island shape used by the packer")
     parser.add_argument("--no-rotate", action="store_true", help="do not rotate islands to pack")
+    parser.add_argument("--no-correct-aspect", action="store_true",
+                        help="ignore the aspect ratio of the active material's image texture")
     parser.add_argument("--uv-name", default=None,
                         help="write into a new UV map of this name (default: the active one); "
                              "it becomes the active and the render UV map")
@@ -261,7 +263,8 @@ def check_args(args, methods, core_methods):
     mode = "off" if args.no_pack else (args.pack or "around")
     pack_props = {"pack": mode.upper(), "margin": args.margin,
                   "margin_method": args.margin_method.upper(),
-                  "shape_method": args.shape_method.upper(), "rotate": not args.no_rotate}
+                  "shape_method": args.shape_method.upper(), "rotate": not args.no_rotate,
+                  "correct_aspect": not args.no_correct_aspect}
     defaults = methods.common_properties()
     _check_range("--margin", args.margin, defaults["margin"])
     return method_props, pack_props

@@ -1269,3 +1269,54 @@ def test_addon_options_follow_the_core_contract(ext):
             elif spec["type"] == "choice":
                 assert default == spec["default"], (info.id, key)
                 assert {i[0] for i in keywords["items"]} <= set(spec["choices"]), (info.id, key)
+
+
+# ---------------------------------------------------------------------------------------------
+# Correct aspect
+
+
+def _material_with_image(obj, width, height):
+    image = bpy.data.images.new("Texture", width, height)
+    material = bpy.data.materials.new("Textured")
+    if material.node_tree is None:  # older Blenders: nodes are off by default
+        material.use_nodes = True
+    node = material.node_tree.nodes.new("ShaderNodeTexImage")
+    node.image = image
+    obj.data.materials.append(material)
+    return image
+
+
+def test_image_aspect_sources(ext, scene):
+    obj = suzanne()
+    aspect = ext.aspect
+    assert aspect.image_aspect(SimpleNamespace(space_data=None), obj) == 1.0
+    _material_with_image(obj, 200, 100)
+    assert aspect.image_aspect(SimpleNamespace(space_data=None), obj) == 2.0
+    # the UV editor's image wins over the material's
+    editor = SimpleNamespace(type="IMAGE_EDITOR", image=SimpleNamespace(size=(100, 300)))
+    assert aspect.image_aspect(SimpleNamespace(space_data=editor), obj) == pytest.approx(1 / 3)
+    empty_editor = SimpleNamespace(type="IMAGE_EDITOR", image=None)
+    assert aspect.image_aspect(SimpleNamespace(space_data=empty_editor), obj) == 2.0
+
+
+def test_correct_aspect_halves_u_for_a_wide_texture(ext, scene):
+    obj = suzanne()
+    io = ext.mesh_io
+    before = read(ext, obj)
+    result, summary = unwrap(ext, [obj], method="lscm", pack="OFF", correct_aspect=False)
+    assert result == {"FINISHED"}
+    plain = read(ext, obj).uv
+    _material_with_image(obj, 256, 128)
+    io.write_uv(obj.data, io.active_uv_name(obj.data), before.uv)
+    result, summary = unwrap(ext, [obj], method="lscm", pack="OFF", correct_aspect=True)
+    assert result == {"FINISHED"}
+    wide = read(ext, obj).uv
+    chart = np.repeat(np.asarray(summary.results[obj.name].chart), before.face_sizes)
+    for k in np.unique(chart[chart >= 0]):
+        a, b = plain[chart == k], wide[chart == k]
+        np.testing.assert_allclose(np.ptp(b[:, 0]), np.ptp(a[:, 0]) / 2, rtol=1e-4)
+        np.testing.assert_allclose(np.ptp(b[:, 1]), np.ptp(a[:, 1]), rtol=1e-4)
+        # scaled about the island's centre
+        np.testing.assert_allclose(b.min(0) + b.max(0), a.min(0) + a.max(0), atol=1e-5)
+    # the distortion attributes measure texture pixels: the same with and without correction
+    assert ext.mesh_io.read_attribute(obj.data, "uvflat_conformal") is not None
