@@ -216,3 +216,24 @@ def test_batch_refuses_bad_arguments_before_running(tmp_path):
         r = _run(*args)
         assert r.returncode == 1 and named in r.stderr, (args, r.stdout + r.stderr)
         assert not (tmp_path / "out").exists()
+
+
+def test_batch_options_follow_the_core_contract():
+    """The script's method options exist in uvflat.METHOD_OPTIONS with the same choices."""
+    import importlib.util
+
+    import uvflat
+
+    spec = importlib.util.spec_from_file_location("uvflat_unwrap_script", SCRIPT)
+    script = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(script)
+    args = script.parse_args(["in.obj", "out.obj"])
+    declared = {}
+    for specs in uvflat.METHOD_OPTIONS.values():
+        for s in specs:
+            declared.setdefault(s["name"], set()).update(s["choices"] or ())
+    by_dest = {a.dest: a for a in args.parser._actions}
+    for dest in ("boundary", "solver"):
+        assert set(by_dest[dest].choices) == declared[dest], dest
+    for dest in ("max_iterations", "tolerance_exponent"):
+        assert by_dest[dest].default is None, f"--{dest}: the method's own default applies"
