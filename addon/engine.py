@@ -18,17 +18,22 @@ step 2 (and UV maps created by step 3 are removed) before the error propagates.
 
 from __future__ import annotations
 
+import threading
 import time
 from dataclasses import dataclass, field
 
 import bpy
 import numpy as np
 
-from . import mesh_io
+from . import aspect, distortion, mesh_io
 
 
 # Summary of the last successful run (for batch scripts and tests).
 LAST_SUMMARY = None
+
+# Optional callable(objects_done, objects_total, charts_done, charts_total) told of the
+# solve's progress (from the solving thread); the batch script draws a progress bar with it.
+PROGRESS_HOOK = None
 
 
 class UnwrapError(Exception):
@@ -67,25 +72,76 @@ class Summary:
     seams_added: int = 0   # edges cut by automatic seams
     cones: int = 0         # cone singularities placed by automatic seams
     seams_marked: bool = False
+    non_manifold_edges: int = 0  # edges of 3+ selected faces, treated as seams
     results: dict = field(default_factory=dict)  # object name -> uvflat.UnwrapResult
 
+    @property
+    def needs_attention(self) -> bool:
+        """Whether the operator should report a warning rather than info."""
+        return bool(self.failed) or self.non_manifold_edges > 0
+
     def line(self) -> str:
+        """The short status line: counts, time, problems grouped by reason, and a pointer to
+        the sidebar's chart list when something needs attention."""
         text = (f"uvflat {self.method}: {self.charts} chart{'s' * (self.charts != 1)}, "
-                f"{self.faces} face{'s' * (self.faces != 1)} in {self.seconds:.3f} s "
-                f"(solve {self.solve_seconds:.3f} s)")
+                f"{self.faces} face{'s' * (self.faces != 1)} in {self.seconds:.3f} s")
         if self.seams_added:
             text += (f"; auto seams: {self.seams_added} edge{'s' * (self.seams_added != 1)} cut "
                      f"through {self.cones} cone{'s' * (self.cones != 1)}"
                      f"{' (marked as seams)' if self.seams_marked else ''}")
         if self.failed:
-            shown = "; ".join(f"{p.object_name} chart {p.chart} ({p.kind}): {p.reason}"
-                              for p in self.failed[:3])
-            more = f"; and {len(self.failed) - 3} more" if len(self.failed) > 3 else ""
             text += (f"; {len(self.failed)} chart{'s' * (len(self.failed) != 1)} not solved, "
-                     f"UVs kept: {shown}{more}")
+                     f"UVs kept: {_grouped(self.failed)}")
         if self.fallback:
-            text += f"; {len(self.fallback)} solved by fallback ({self.fallback[0].reason})"
+            text += f"; {len(self.fallback)} solved by fallback ({_grouped(self.fallback)})"
+        if self.non_manifold_edges:
+            n = self.non_manifold_edges
+            text += (f"; {n} non-manifold edge{'s' * (n != 1)} (3+ faces) treated as "
+                     f"seam{'s' * (n != 1)}")
+        flips = self.flipped_triangles
+        if flips:
+            text += f"; {flips} flipped triangle{'s' * (flips != 1)}"
+        if self.needs_attention or self.fallback or flips:
+            text += " - see the uvflat sidebar"
         return text
+
+    @property
+    def flipped_triangles(self) -> int:
+        return sum(int(getattr(c, "flips", 0)) for r in self.results.values() for c in r.charts
+                   if c.status != "failed")
+
+
+def _grouped(problems, shown=2) -> str:
+    """Reasons with their counts, most frequent first: 'closed surface (x3); ...'."""
+    counts: dict[str, int] = {}
+    for p in problems:
+        counts[p.reason] = counts.get(p.reason, 0) + 1
+    ranked = sorted(counts.items(), key=lambda kv: -kv[1])
+    text = "; ".join(f"{reason} (x{n})" if n > 1 else reason for reason, n in ranked[:shown])
+    if len(ranked) > shown:
+        text += f"; {len(ranked) - shown} other reason{'s' * (len(ranked) - shown != 1)}"
+    return text
+
+
+def chart_rows(summary, limit=None):
+    """One dict per chart of ``summary`` (object, chart, method, status, faces, flips, overlap,
+    conformal, area, seconds, reason), the ones needing attention first: failed, fallback,
+    flipped, overlapping, then by conformal distortion."""
+    rows = []
+    for name, result in summary.results.items():
+        for c in result.charts:
+            rows.append({"object": name, "chart": c.id, "method": c.method, "status": c.status,
+                         "faces": c.faces, "flips": c.flips, "overlap": bool(c.overlap),
+                         "conformal": c.conformal, "area": c.area, "seconds": c.seconds,
+                         "reason": c.reason or "", "code": getattr(c, "reason_code", "")})
+
+    def attention(row):
+        conformal = row["conformal"] if row["conformal"] == row["conformal"] else float("inf")
+        return (row["status"] != "failed", row["status"] != "fallback", row["flips"] == 0,
+                not row["overlap"], -conformal)
+
+    rows.sort(key=attention)
+    return rows if limit is None else rows[:limit]
 
 
 @dataclass
@@ -99,12 +155,17 @@ class _Job:
     old_uv: np.ndarray          # (C,2) float32, exactly as stored
     pins: np.ndarray            # (P,) corner indices
     result: object = None
+    fitted: bool = False        # solved with fit_to (new islands placed where the old ones were)
     created_uv: bool = False
     written: bool = False
     selection: dict | None = None
+    pin_state: tuple | None = None  # (saved pin attribute,) while packing around locked islands
     raw_selected: np.ndarray | None = None
     avoid: np.ndarray | None = None        # vertex indices where seams must not go
     old_seams: np.ndarray | None = None    # (E,) seam flags before marking new seams
+    seams: np.ndarray | None = None  # (S,2) seam vertex pairs
+    quality: dict | None = None      # distortion attributes as they were before writing
+    aspect: float = 1.0              # width / height of the texture (correct aspect)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -153,6 +214,7 @@ def _read(obj) -> _Job:
         pins = np.zeros(0, dtype=np.int64)
     job = _Job(obj, positions, corner_verts, face_sizes, selected, uv_name, old_uv, pins)
     job.raw_selected = raw_selected
+    job.seams = mesh_io.read_seams(mesh)
     return job
 
 
@@ -198,13 +260,15 @@ def _mark_new_seams(job: _Job) -> int:
     return int(add.sum())
 
 
-def _solve(core, job: _Job, method, options, use_fit):
+def _solve(core, job: _Job, method, options, use_fit, progress=None):
+    """Solve one job with the core; touches no Blender data (safe on a worker thread)."""
     kwargs = dict(options)
     if job.avoid is not None and len(job.avoid):
         kwargs["avoid_vertices"] = job.avoid.astype(np.int64)
-    seams = mesh_io.read_seams(job.obj.data)
-    if len(seams):
-        kwargs["seams"] = seams.astype(np.int64)
+    if len(job.seams):
+        kwargs["seams"] = job.seams.astype(np.int64)
+    if progress is not None:
+        kwargs["progress"] = progress
     if len(job.pins):
         kwargs["pins"] = job.pins.astype(np.int64)
         kwargs["pin_uvs"] = job.old_uv[job.pins].astype(np.float64)
@@ -213,6 +277,7 @@ def _solve(core, job: _Job, method, options, use_fit):
         old = job.old_uv[corners]
         if len(old) and np.all(np.isfinite(old)) and np.ptp(old, axis=0).min() > 0.0:
             kwargs["fit_to"] = job.old_uv.astype(np.float64)
+            job.fitted = True
     job.result = core.unwrap(
         job.positions,
         job.corner_verts.astype(np.int64),
@@ -223,7 +288,7 @@ def _solve(core, job: _Job, method, options, use_fit):
     )
 
 
-def _write(job: _Job):
+def _write(job: _Job, core):
     mesh = job.obj.data
     name, job.created_uv = mesh_io.ensure_uv_map(mesh)
     job.written = True  # from here on, _restore must undo this job
@@ -234,7 +299,20 @@ def _write(job: _Job):
     solved = np.asarray(job.result.face_solved, dtype=bool) & job.selected
     corners = np.repeat(solved, job.face_sizes)
     new_uv[corners] = np.asarray(job.result.uv)[corners]
+    # per-face quality, measured independently of the solver in texture pixels (before the
+    # aspect correction; packing moves islands by similarities only, which changes none of it)
+    quality = distortion.measure(core, job, new_uv, solved)
+    if job.aspect != 1.0:
+        chart = np.asarray(job.result.chart, dtype=np.int64)
+        free = solved.copy()
+        if len(job.pins):  # pinned UVs stay exactly where they are
+            free &= ~np.isin(chart, chart[mesh_io.corner_faces(job.face_sizes)[job.pins]])
+        aspect.correct(new_uv, np.repeat(free, job.face_sizes), np.repeat(chart, job.face_sizes),
+                       job.aspect)
     mesh_io.write_uv(mesh, job.uv_name, new_uv)
+    job.quality = distortion.snapshot(mesh)
+    distortion.write(mesh, job.face_sizes, solved, *quality)
+    mesh.update()
 
 
 def _pack_faces(job: _Job):
@@ -259,28 +337,71 @@ def _restore(jobs):
                 mesh_io.remove_uv_map(mesh, job.uv_name)
             else:
                 mesh_io.write_uv(mesh, job.uv_name, job.old_uv)
+            if job.quality is not None:
+                distortion.restore(mesh, job.quality)
+                job.quality = None
+                mesh.update()
             job.written = False
-        if job.selection is not None:
-            mesh_io.restore_selection(mesh, job.selection)
-            job.selection = None
+    _restore_selection_and_pins(jobs)
 
 
-def _pack(context, jobs, in_mode, active, margin, shape) -> bool:
-    """Pack the islands of the solved, unpinned charts with Blender's packer.
+@dataclass(frozen=True)
+class PackSettings:
+    """How the new islands are packed (Blender's ``uv.pack_islands`` options).
 
-    Returns True when the objects were left in edit mode (the selection did not have to be
-    changed for packing, so there was nothing to put back).
+    ``mode``: ``AROUND`` packs the new islands into the free space of the 0-1 tile, every
+    other island of the UV map locked in place (Blender's packer with pinned islands locked);
+    ``ALL`` packs the new islands over the whole tile as Blender's own Unwrap does (other
+    islands are not moved, but may be overlapped); ``OFF`` fits each new island to where its
+    faces' previous UVs were.
     """
-    pack_sets = [(job, _pack_faces(job)) for job in jobs]
-    if not any(faces.any() for _, faces in pack_sets):
+
+    mode: str = "AROUND"
+    margin: float = 0.001
+    margin_method: str = "SCALED"
+    shape_method: str = "CONCAVE"
+    rotate: bool = True
+
+
+def _locked_faces(job: _Job, packed):
+    """Faces whose islands stay where they are while packing around them: every visible face
+    of an existing UV map that is not packed now (unselected, failed, pinned)."""
+    if job.created_uv:
+        return np.zeros_like(packed)
+    return ~packed & ~mesh_io.read_hidden_faces(job.obj.data)
+
+
+def _pack(context, jobs, in_mode, active, settings: PackSettings, only=None) -> bool:
+    """Pack the islands of the solved, unpinned charts with Blender's packer (of the jobs in
+    ``only``, default all), around the locked islands when ``settings.mode == "AROUND"``.
+
+    The selection (and, around locked islands, the pin flags) are changed for the packer and
+    put back exactly afterwards. Returns True when the objects were left in edit mode (nothing
+    had to be put back).
+    """
+    around = settings.mode == "AROUND"
+    pack_sets = []
+    chosen = None if only is None else {id(job) for job in only}
+    for job in jobs:
+        faces = (_pack_faces(job) if chosen is None or id(job) in chosen
+                 else np.zeros_like(job.selected))
+        locked = _locked_faces(job, faces) if around and faces.any() else np.zeros_like(faces)
+        pack_sets.append((job, faces, locked))
+    if not any(faces.any() for _, faces, _ in pack_sets):
         return False
-    change = [(job, faces) for job, faces in pack_sets if not np.array_equal(faces, job.raw_selected)]
+    change = [(job, faces, locked) for job, faces, locked in pack_sets
+              if locked.any() or not np.array_equal(faces, job.raw_selected)]
     tool_settings = context.scene.tool_settings
     sync = tool_settings.use_uv_select_sync
     select_mode = tuple(tool_settings.mesh_select_mode)
-    for job, faces in change:
-        job.selection = mesh_io.save_selection(job.obj.data)
-        mesh_io.select_faces(job.obj.data, faces)
+    for job, faces, locked in change:
+        mesh = job.obj.data
+        job.selection = mesh_io.save_selection(mesh)
+        mesh_io.select_faces(mesh, faces | locked)
+        if locked.any():
+            job.pin_state = (mesh_io.save_pins(mesh, job.uv_name),)
+            pins = mesh_io.read_pins(mesh, job.uv_name) | np.repeat(locked, job.face_sizes)
+            mesh_io.write_pins(mesh, job.uv_name, pins)
     if change:
         # face select mode, so entering edit mode cannot grow the selection onto faces whose
         # vertices are all selected
@@ -288,7 +409,10 @@ def _pack(context, jobs, in_mode, active, margin, shape) -> bool:
     try:
         _enter_edit_mode(context.view_layer, in_mode, active)
         tool_settings.use_uv_select_sync = True  # pack by mesh face selection
-        result = bpy.ops.uv.pack_islands(margin=margin, shape_method=shape)
+        result = bpy.ops.uv.pack_islands(
+            margin=settings.margin, margin_method=settings.margin_method,
+            shape_method=settings.shape_method, rotate=settings.rotate,
+            pin=around, pin_method="LOCKED")
     finally:
         tool_settings.use_uv_select_sync = sync
         if change:
@@ -298,84 +422,192 @@ def _pack(context, jobs, in_mode, active, margin, shape) -> bool:
     if not change:
         return True
     _leave_edit_mode(in_mode)
-    for job, _ in change:
-        mesh_io.restore_selection(job.obj.data, job.selection)
-        job.selection = None
+    _restore_selection_and_pins(job for job, _, _ in change)
     return False
 
 
-def unwrap_edit_objects(context, method, options, *, pack=True, margin=0.001,
-                        pack_shape="AABB", auto_seams=None, mark_seams=True,
-                        avoid_group="") -> Summary:
-    """Unwrap the selected faces of every mesh object in edit mode; see the module docstring.
+def _restore_selection_and_pins(jobs):
+    for job in jobs:
+        mesh = job.obj.data
+        if job.selection is not None:
+            mesh_io.restore_selection(mesh, job.selection)
+            job.selection = None
+        if job.pin_state is not None:
+            mesh_io.restore_pins(mesh, job.uv_name, job.pin_state[0])
+            job.pin_state = None
 
-    ``auto_seams``: the automatic-seams keywords of ``uvflat.unwrap`` (default: the core's);
-    ``mark_seams``: mark the edges it cut as seams; ``avoid_group``: name of a vertex group
-    where new seams must not go.
+
+class Run:
+    """One unwrap split in three steps, so that the solve can run on a worker thread while
+    Blender keeps drawing: :meth:`prepare` (Blender data, main thread), :meth:`solve` (core
+    only, any thread) and :meth:`finish` or :meth:`abort` (Blender data, main thread).
+
+    Nothing is written before :meth:`finish`; :meth:`abort` leaves every UV map, seam and
+    selection exactly as :meth:`prepare` found them.
     """
-    options = {**(auto_seams or {}), **options}
-    start = time.perf_counter()
-    core = import_core()
-    if method not in core.METHODS:
-        raise UnwrapError(f"method '{method}' is not provided by this uvflat build "
-                          f"(available: {', '.join(core.METHODS)})")
 
-    view_layer = context.view_layer
-    in_mode = [o for o in context.objects_in_mode if o.type == "MESH"]
-    objects = [o for o in context.objects_in_mode_unique_data if o.type == "MESH"]
-    if not objects:
-        raise UnwrapError("no mesh object in edit mode")
-    active = context.active_object if context.active_object in in_mode else in_mode[0]
-    summary = Summary(method=method)
-    jobs: list[_Job] = []
+    def __init__(self, method, options, pack: PackSettings, correct_aspect=True, *,
+                 auto_seams=None, mark_seams=True, avoid_group=""):
+        self.method = method
+        self.correct_aspect = correct_aspect
+        # automatic-seams keywords of uvflat.unwrap first, the method's options after
+        self.options = {**(auto_seams or {}), **dict(options)}
+        self.mark_seams = mark_seams
+        self.avoid_group = avoid_group
+        self.pack = pack
+        self.jobs: list[_Job] = []
+        self.summary = Summary(method=method)
+        self.start = time.perf_counter()
+        self.cancel_requested = threading.Event()
+        # (objects done, objects total, charts done, charts total), written by the solve
+        self.progress = (0, 0, 0, 0)
+        self.error: BaseException | None = None
+        self.cancelled = False
+        self._thread: threading.Thread | None = None
+        self._core = None
 
-    _leave_edit_mode(in_mode)
+    # -- main thread -------------------------------------------------------------------------
+
+    def prepare(self, context, *, stay_out=False):
+        """Leave edit mode, read every mesh; back in edit mode unless ``stay_out``."""
+        core = import_core()
+        if self.method not in core.METHODS:
+            raise UnwrapError(f"method '{self.method}' is not provided by this uvflat build "
+                              f"(available: {', '.join(core.METHODS)})")
+        self._core = core
+        self.view_layer = context.view_layer
+        self.in_mode = [o for o in context.objects_in_mode if o.type == "MESH"]
+        objects = [o for o in context.objects_in_mode_unique_data if o.type == "MESH"]
+        if not objects:
+            raise UnwrapError("no mesh object in edit mode")
+        self.active = (context.active_object if context.active_object in self.in_mode
+                       else self.in_mode[0])
+        _leave_edit_mode(self.in_mode)
+        try:
+            avoid = {}
+            if self.avoid_group and self.options.get("auto_seams", True):
+                avoid = _read_avoid_groups(context, objects, self.in_mode, self.active,
+                                           self.avoid_group)
+            for obj in objects:
+                job = _read(obj)
+                job.avoid = avoid.get(obj.name)
+                if job.selected.any():
+                    if self.correct_aspect:
+                        job.aspect = aspect.image_aspect(context, obj)
+                    self.jobs.append(job)
+            if not self.jobs:
+                raise UnwrapError("no faces selected")
+        except BaseException:
+            _enter_edit_mode(self.view_layer, self.in_mode, self.active)
+            raise
+        if not stay_out:
+            _enter_edit_mode(self.view_layer, self.in_mode, self.active)
+        self.progress = (0, len(self.jobs), 0, 0)
+        return self
+
+    def start_thread(self):
+        """Run :meth:`solve` on a worker thread (see :attr:`running`)."""
+        self._thread = threading.Thread(target=self._solve_catching, name="uvflat solve",
+                                        daemon=True)
+        self._thread.start()
+
+    @property
+    def running(self) -> bool:
+        return self._thread is not None and self._thread.is_alive()
+
+    def cancel(self):
+        """Ask the solve to stop; :meth:`finish` will then refuse and :meth:`abort` is due."""
+        self.cancel_requested.set()
+
+    def finish(self, context, *, in_edit=True) -> Summary:
+        """Write the solved UVs, pack, and return to edit mode (see the module docstring)."""
+        if self.error is not None:
+            raise self.error
+        if self.cancel_requested.is_set() or self.cancelled:
+            raise UnwrapError("cancelled")
+        if in_edit:
+            _leave_edit_mode(self.in_mode)
+        return _write_and_pack(context, self)
+
+    def abort(self, context):
+        """Nothing was written: make sure the objects are in edit mode as before."""
+        if any(not o.data.is_editmode for o in self.in_mode):
+            _enter_edit_mode(self.view_layer, self.in_mode, self.active)
+
+    # -- any thread --------------------------------------------------------------------------
+
+    def solve(self):
+        """Solve every job with the core (no Blender data touched)."""
+        core = self._core
+        packing = self.pack.mode != "OFF"
+        for k, job in enumerate(self.jobs):
+            if self.cancel_requested.is_set():
+                self.cancelled = True
+                return
+            t0 = time.perf_counter()
+
+            def progress(done, total, k=k):
+                self.progress = (k, len(self.jobs), done, total)
+                hook = PROGRESS_HOOK
+                if hook is not None:
+                    hook(*self.progress)
+                return not self.cancel_requested.is_set()
+
+            try:
+                _solve(core, job, self.method, self.options, use_fit=not packing,
+                       progress=progress)
+            except core.Cancelled:
+                self.cancelled = True
+                return
+            except core.UvflatError as ex:
+                raise UnwrapError(f"{job.obj.name}: {ex}") from ex
+            self.summary.solve_seconds += time.perf_counter() - t0
+            self.progress = (k + 1, len(self.jobs), 0, 0)
+
+    def _solve_catching(self):
+        try:
+            self.solve()
+        except BaseException as ex:  # handed to the main thread by finish()
+            self.error = ex
+
+
+def _write_and_pack(context, run: Run) -> Summary:
+    """Steps 3 to 5 of the module docstring, from object mode; restores everything on error."""
+    jobs, pack, summary = run.jobs, run.pack, run.summary
+    packing = pack.mode != "OFF"
     in_edit = False
     try:
-        avoid = {}
-        if avoid_group and (auto_seams or {}).get("auto_seams", True):
-            avoid = _read_avoid_groups(context, objects, in_mode, active, avoid_group)
-        # 2. read and solve everything before writing anything
-        for obj in objects:
-            job = _read(obj)
-            job.avoid = avoid.get(obj.name)
-            if not job.selected.any():
-                continue
-            t0 = time.perf_counter()
-            try:
-                _solve(core, job, method, options, use_fit=not pack)
-            except core.UvflatError as ex:
-                raise UnwrapError(f"{obj.name}: {ex}") from ex
-            summary.solve_seconds += time.perf_counter() - t0
-            jobs.append(job)
-        if not jobs:
-            raise UnwrapError("no faces selected")
-
         try:
             # 3. write (UVs, then the seams automatic seams cut)
             for job in jobs:
-                _write(job)
-                if mark_seams:
+                _write(job, run._core)
+                if run.mark_seams:
                     summary.seams_added += _mark_new_seams(job)
                 else:
                     summary.seams_added += len(getattr(job.result, "new_seams", ()))
-            summary.seams_marked = bool(mark_seams and summary.seams_added)
-            # 4. pack the new islands only
-            if pack:
-                in_edit = _pack(context, jobs, in_mode, active, margin, pack_shape)
-                summary.packed = True
+            summary.seams_marked = bool(run.mark_seams and summary.seams_added)
+            # 4. pack the new islands only. With packing off, islands without previous UVs
+            # to keep them near (all area-scaled around the origin) are packed anyway, so
+            # that they land inside the 0-1 tile without overlapping each other.
+            only = None if packing else [job for job in jobs if not job.fitted]
+            if only is None or only:
+                settings = pack if packing else PackSettings(
+                    "AROUND", pack.margin, pack.margin_method, pack.shape_method, pack.rotate)
+                in_edit = _pack(context, jobs, run.in_mode, run.active, settings, only)
+                summary.packed = packing
         except BaseException:
-            _leave_edit_mode(in_mode)
+            _leave_edit_mode(run.in_mode)
             in_edit = False
             _restore(jobs)
             raise
     finally:
         if not in_edit:
-            _enter_edit_mode(view_layer, in_mode, active)
+            _enter_edit_mode(run.view_layer, run.in_mode, run.active)
 
     for job in jobs:
         summary.results[job.obj.name] = job.result
         summary.faces += int((np.asarray(job.result.face_solved, dtype=bool) & job.selected).sum())
+        summary.non_manifold_edges += int(getattr(job.result, "non_manifold_edges", 0))
         for chart in job.result.charts:
             summary.cones += getattr(chart, "cones", 0)
             problem = ChartProblem(job.obj.name, chart.id, chart.kind, chart.status,
@@ -387,5 +619,48 @@ def unwrap_edit_objects(context, method, options, *, pack=True, margin=0.001,
                 if chart.status == "fallback":
                     summary.fallback.append(problem)
     summary.objects = len(jobs)
-    summary.seconds = time.perf_counter() - start
+    summary.seconds = time.perf_counter() - run.start
     return summary
+
+
+def selected_face_count(context) -> int:
+    """Selected faces of the meshes in edit mode (from the edit meshes' statistics)."""
+    total = 0
+    for obj in context.objects_in_mode_unique_data:
+        if obj.type == "MESH":
+            total += getattr(obj.data, "total_face_sel", 0)
+    return total
+
+
+# Rough seconds per selected face of one solve, per method (linear methods are one sparse
+# factorization; the iterative ones many): only to decide whether to show progress.
+_SECONDS_PER_FACE = {"tutte": 2e-6, "harmonic": 2e-6, "mean_value": 3e-6, "lscm": 3e-6,
+                     "spectral": 2e-5, "abf": 3e-5, "arap": 5e-5, "slim": 5e-5, "mips": 5e-5,
+                     "scaffold": 2e-4}
+# Above this estimate the operator solves on a worker thread and shows progress.
+MODAL_AFTER_SECONDS = 0.5
+
+
+def estimated_seconds(method, faces) -> float:
+    return faces * _SECONDS_PER_FACE.get(method, 5e-5)
+
+
+def unwrap_edit_objects(context, method, options, *, pack: PackSettings | None = None,
+                        correct_aspect=True, auto_seams=None, mark_seams=True,
+                        avoid_group="") -> Summary:
+    """Unwrap the selected faces of every mesh object in edit mode; see the module docstring.
+
+    ``pack``: how the new islands are packed (default :class:`PackSettings`: around the
+    other islands). ``correct_aspect``: scale the new islands for the texture's aspect ratio
+    (see ``aspect.py``). ``auto_seams``: the automatic-seams keywords of ``uvflat.unwrap``
+    (default: the core's); ``mark_seams``: mark the edges it cut as seams; ``avoid_group``:
+    a vertex group where new seams must not go."""
+    run = Run(method, options, PackSettings() if pack is None else pack, correct_aspect,
+              auto_seams=auto_seams, mark_seams=mark_seams, avoid_group=avoid_group)
+    run.prepare(context, stay_out=True)
+    try:
+        run.solve()
+    except BaseException:
+        run.abort(context)
+        raise
+    return run.finish(context, in_edit=False)

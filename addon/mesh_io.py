@@ -124,6 +124,15 @@ def read_face_selection(mesh, *, include_hidden=False):
     return selected
 
 
+def read_hidden_faces(mesh):
+    """Hidden faces as an ``(F,)`` bool mask."""
+    n_f = len(mesh.polygons)
+    hidden = _attribute(mesh, (".hide_poly",), n_f, bool)
+    if hidden is None:
+        hidden = _get(mesh.polygons, "hide", n_f, bool)
+    return hidden
+
+
 def uv_map_names(mesh):
     return [layer.name for layer in mesh.uv_layers]
 
@@ -170,6 +179,30 @@ def ensure_uv_map(mesh):
     return layer.name, True
 
 
+def make_first_uv_map(mesh, name):
+    """Reorder the UV maps so that ``name`` is the first one (exporters such as glTF write
+    the maps in order: the first becomes TEXCOORD_0), then make it active and the render map.
+    Every map keeps its name, UVs and pin flags."""
+    names = uv_map_names(mesh)
+    if name not in names:
+        raise KeyError(f"mesh '{mesh.name}' has no UV map {name!r}")
+    if names[0] != name:
+        saved = [(n, read_uv(mesh, n), save_pins(mesh, n)) for n in names]
+        saved.sort(key=lambda item: item[0] != name)  # stable: the others keep their order
+        for n in names:
+            mesh.uv_layers.remove(mesh.uv_layers[n])
+        for n, uv, pins in saved:
+            layer = mesh.uv_layers.new(name=n, do_init=False)
+            if layer is None or layer.name != n:
+                raise RuntimeError(f"mesh '{mesh.name}': could not re-create UV map {n!r}")
+            write_uv(mesh, n, uv)
+            if pins is not None:
+                write_pins(mesh, n, pins)
+    layer = mesh.uv_layers[name]
+    mesh.uv_layers.active = layer
+    layer.active_render = True
+
+
 def remove_uv_map(mesh, name):
     layer = mesh.uv_layers.get(name)
     if layer is not None:
@@ -195,6 +228,75 @@ def write_pins(mesh, name, pins):
         attr = mesh.attributes.new(attr_name, "BOOLEAN", "CORNER")
     attr.data.foreach_set("value", np.ascontiguousarray(pins, dtype=bool))
     mesh.update()
+
+
+def save_pins(mesh, name):
+    """The pin attribute of UV map ``name`` as stored (``None`` when the map has none)."""
+    attr = mesh.attributes.get(f".pn.{name}")
+    if attr is None:
+        return None
+    return _get(attr.data, "value", len(attr.data), bool)
+
+
+def restore_pins(mesh, name, saved):
+    """Put the pin attribute of UV map ``name`` back as :func:`save_pins` found it."""
+    attr_name = f".pn.{name}"
+    if saved is None:
+        attr = mesh.attributes.get(attr_name)
+        if attr is not None:
+            mesh.attributes.remove(attr)
+        mesh.update()
+    else:
+        write_pins(mesh, name, saved)
+
+
+# Generic attributes (quality attributes written after an unwrap): field and width per type
+_FIELDS = {"FLOAT": ("value", 1, np.float32), "BOOLEAN": ("value", 1, bool),
+           "BYTE_COLOR": ("color_srgb", 4, np.float32), "FLOAT_COLOR": ("color", 4, np.float32)}
+
+
+def read_attribute(mesh, name):
+    """Values of attribute ``name`` as stored (``(N,)`` or ``(N,4)`` for colours), or ``None``."""
+    attr = mesh.attributes.get(name)
+    if attr is None or attr.data_type not in _FIELDS:
+        return None
+    field, width, dtype = _FIELDS[attr.data_type]
+    return _get(attr.data, field, len(attr.data), dtype, width)
+
+
+def write_attribute(mesh, name, domain, data_type, values):
+    """Create or replace attribute ``name`` (``domain``, ``data_type``) with ``values``."""
+    attr = mesh.attributes.get(name)
+    if attr is not None and (attr.domain != domain or attr.data_type != data_type):
+        mesh.attributes.remove(attr)
+        attr = None
+    if attr is None:
+        attr = mesh.attributes.new(name, data_type, domain)
+    field, width, dtype = _FIELDS[data_type]
+    data = np.ascontiguousarray(values, dtype=dtype).reshape(-1)
+    if data.size != width * len(attr.data):
+        raise ValueError(f"mesh '{mesh.name}': {data.size // width} values for attribute {name} "
+                         f"of {len(attr.data)} elements")
+    attr.data.foreach_set(field, data)
+
+
+def save_attribute(mesh, name):
+    """``(domain, data_type, values)`` of attribute ``name``, or ``None`` if absent."""
+    attr = mesh.attributes.get(name)
+    if attr is None:
+        return None
+    return attr.domain, attr.data_type, read_attribute(mesh, name)
+
+
+def restore_attribute(mesh, name, saved):
+    """Put attribute ``name`` back as :func:`save_attribute` found it."""
+    if saved is None:
+        attr = mesh.attributes.get(name)
+        if attr is not None:
+            mesh.attributes.remove(attr)
+    else:
+        domain, data_type, values = saved
+        write_attribute(mesh, name, domain, data_type, values)
 
 
 def write_seams(mesh, use_seam):

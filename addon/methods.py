@@ -159,19 +159,47 @@ def common_properties() -> dict[str, Any]:
             items=tuple((m.id, m.label, m.description) for m in METHODS),
             default="lscm",
         ),
-        "pack": BoolProperty(
-            name="Pack Islands",
-            description="Pack the new islands with Blender's packer. When off, each new island "
-                        "is fitted to where its faces' previous UVs were",
+        "pack": EnumProperty(
+            name="Pack",
+            description="Packing of the new islands with Blender's packer",
+            items=(("AROUND", "Around Others", "Pack the new islands into the free space of the "
+                                               "0-1 tile; every other island stays exactly where "
+                                               "it is"),
+                   ("ALL", "Whole Tile", "Pack the new islands over the whole 0-1 tile, as "
+                                         "Blender's Unwrap does; other islands are not moved "
+                                         "but may be overlapped"),
+                   ("OFF", "Off", "Fit each new island to where its faces' previous UVs were "
+                                  "(islands without previous UVs are packed around the others)")),
+            default="AROUND",
+        ),
+        "correct_aspect": BoolProperty(
+            name="Correct Aspect",
+            description="Scale the new islands for a non-square texture (the UV editor's "
+                        "image, else the active material's image texture), as Blender's "
+                        "Unwrap does",
             default=True,
         ),
-        "pack_shape": EnumProperty(
+        # Blender's own defaults of uv.pack_islands for the three below
+        "rotate": BoolProperty(
+            name="Rotate",
+            description="Rotate islands to pack them tighter",
+            default=True,
+        ),
+        "shape_method": EnumProperty(
             name="Shape",
             description="Island shape used by Blender's packer",
-            items=(("AABB", "Bounding Box", "Fast (what Blender's own unwrap uses)"),
-                   ("CONVEX", "Convex Hull", "Tighter, slower"),
-                   ("CONCAVE", "Exact Shape", "Tightest, slowest")),
-            default="AABB",
+            items=(("CONCAVE", "Exact Shape (Concave)", "Tightest, slowest"),
+                   ("CONVEX", "Convex Hull", "Tighter than bounding boxes"),
+                   ("AABB", "Bounding Box", "Fastest")),
+            default="CONCAVE",
+        ),
+        "margin_method": EnumProperty(
+            name="Margin Method",
+            description="How the margin is measured",
+            items=(("SCALED", "Scaled", "Margin scaled with the islands (as in Blender's Unwrap)"),
+                   ("ADD", "Add", "Margin added to the island size"),
+                   ("FRACTION", "Fraction", "Margin as a fraction of the UV tile")),
+            default="SCALED",
         ),
         "margin": FloatProperty(
             name="Margin",
@@ -246,6 +274,13 @@ def auto_seam_options(props) -> dict[str, Any]:
 
 
 SETTING_NAMES: tuple[str, ...] = tuple(common_properties().keys())
+PACK_SETTING_NAMES: tuple[str, ...] = ("pack", "shape_method", "margin_method", "margin", "rotate")
+
+
+def pack_settings(props) -> dict[str, Any]:
+    """Keyword arguments of ``engine.PackSettings`` from ``props`` (operator or defaults)."""
+    return {"mode": props.pack, "margin": props.margin, "margin_method": props.margin_method,
+            "shape_method": props.shape_method, "rotate": props.rotate}
 
 
 def add_properties(cls):
@@ -284,8 +319,23 @@ def draw_settings(layout, props) -> None:
     else:
         col.prop(props, "avoid_group")
     col.prop(props, "mark_seams")
+    layout.prop(props, "correct_aspect")
     layout.prop(props, "pack")
     col = layout.column()
-    col.active = props.pack
-    col.prop(props, "pack_shape")
-    col.prop(props, "margin")
+    col.active = props.pack != "OFF"
+    for key in PACK_SETTING_NAMES[1:]:
+        col.prop(props, key)
+
+
+def apply_defaults(props, defaults) -> list[str]:
+    """Copy the scene ``defaults`` into operator ``props`` for every setting the caller did not
+    set (``props.is_property_set``): a keymap item, a pie menu or
+    ``layout.operator(...).method = "abf"`` keeps what it asked for. Returns the names copied.
+    """
+    copied = []
+    for name in SETTING_NAMES:
+        if props.is_property_set(name):
+            continue
+        setattr(props, name, getattr(defaults, name))
+        copied.append(name)
+    return copied

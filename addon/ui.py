@@ -5,13 +5,61 @@ from __future__ import annotations
 
 import bpy
 
-from . import methods
-from .operators import UV_OT_uvflat_unwrap
+from . import distortion, engine, methods
+from .operators import UV_OT_uvflat_select_flipped, UV_OT_uvflat_unwrap
+
+# Viewport colour type of each 3D view before the heat map replaced it (by space pointer).
+_previous_color_type: dict[int, str] = {}
+
+
+def show_heat_map(context, show, kind):
+    """Show (or stop showing) the distortion heat map: the meshes in edit mode (or the
+    selected ones) get the ``kind`` colour attribute as active colour, and every 3D view of
+    the screen shades solid colours by attribute."""
+    objects = [o for o in (getattr(context, "objects_in_mode", None) or
+                           getattr(context, "selected_objects", None) or []) if o.type == "MESH"]
+    name = distortion.COLOR[kind]
+    for obj in objects:
+        colors = obj.data.color_attributes
+        if show and colors.get(name) is not None:
+            colors.active_color_name = name
+    screen = getattr(context, "screen", None)
+    for area in (screen.areas if screen is not None else ()):
+        if area.type != "VIEW_3D":
+            continue
+        for space in area.spaces:
+            if space.type != "VIEW_3D":
+                continue
+            shading = space.shading
+            key = space.as_pointer()
+            if show:
+                _previous_color_type.setdefault(key, shading.color_type)
+                shading.color_type = "ATTRIBUTE"
+            elif key in _previous_color_type:
+                shading.color_type = _previous_color_type.pop(key)
+        area.tag_redraw()
+
+
+def _update_heat_map(self, context):
+    show_heat_map(context, self.show_distortion, self.distortion_kind)
 
 
 @methods.add_properties
 class UVFLAT_PG_defaults(bpy.types.PropertyGroup):
-    """Scene-level defaults copied into the unwrap operator when it is invoked."""
+    """Scene-level defaults copied into the unwrap operator when it is invoked, and the
+    sidebar's display settings (not operator settings)."""
+
+    show_distortion: bpy.props.BoolProperty(
+        name="Show Distortion",
+        description="Colour the faces by the distortion of the last unwrap (blue 1, red at "
+                    f"{distortion.RED_AT:g} or more, grey not measured) in the 3D viewport",
+        default=False, update=_update_heat_map)
+    distortion_kind: bpy.props.EnumProperty(
+        name="Distortion",
+        description="Which distortion the heat map shows",
+        items=(("conformal", "Conformal", "Angle distortion, sigma1/sigma2"),
+               ("area", "Area", "Area distortion, max(J, 1/J)")),
+        default="conformal", update=_update_heat_map)
 
 
 class UVFLAT_PT_defaults(bpy.types.Panel):
@@ -33,15 +81,84 @@ class UVFLAT_PT_defaults(bpy.types.Panel):
         col.operator(UV_OT_uvflat_unwrap.bl_idname, text="Unwrap", icon="UV")
 
 
+# Charts listed by the result panel (the ones needing attention first).
+CHART_ROWS = 12
+
+
+def _fmt(x):
+    return "-" if x != x else ("inf" if x == float("inf") else f"{x:.3f}")
+
+
+class UVFLAT_PT_result(bpy.types.Panel):
+    bl_label = "Last Unwrap"
+    bl_space_type = "IMAGE_EDITOR"
+    bl_region_type = "UI"
+    bl_category = "uvflat"
+
+    @classmethod
+    def poll(cls, context):
+        return UVFLAT_PT_defaults.poll(context)
+
+    def draw(self, context):
+        layout = self.layout
+        settings = context.scene.uvflat
+        row = layout.row(align=True)
+        row.prop(settings, "show_distortion", toggle=True, icon="COLOR")
+        row.prop(settings, "distortion_kind", text="")
+        col = layout.column()
+        col.enabled = context.mode == "EDIT_MESH"
+        col.operator(UV_OT_uvflat_select_flipped.bl_idname, icon="RESTRICT_SELECT_OFF")
+        summary = engine.LAST_SUMMARY
+        if summary is None:
+            layout.label(text="No unwrap yet")
+            return
+        box = layout.box()
+        box.label(text=f"{summary.method}: {summary.charts} charts, {summary.faces} faces, "
+                       f"{summary.seconds:.3f} s", icon="INFO")
+        if summary.non_manifold_edges:
+            box.label(text=f"{summary.non_manifold_edges} non-manifold edges cut as seams",
+                      icon="ERROR")
+        rows = engine.chart_rows(summary)
+        grid = box.grid_flow(row_major=True, columns=8, even_columns=False, align=True)
+        for heading in ("Chart", "Method", "Faces", "Flips", "Overlap", "Conformal", "Area",
+                        "Time"):
+            grid.label(text=heading)
+        for r in rows[:CHART_ROWS]:
+            grid.label(text=f"{r['object']}:{r['chart']}",
+                       icon="ERROR" if r["status"] == "failed" else "NONE")
+            grid.label(text=r["method"] if r["status"] != "failed" else "failed")
+            grid.label(text=str(r["faces"]))
+            grid.label(text=str(r["flips"]))
+            grid.label(text="yes" if r["overlap"] else "no")
+            grid.label(text=_fmt(r["conformal"]))
+            grid.label(text=_fmt(r["area"]))
+            grid.label(text=f"{r['seconds']:.3f}")
+        reasons = [r for r in rows[:CHART_ROWS] if r["reason"]]
+        for r in reasons:
+            box.label(text=f"{r['object']}:{r['chart']} {r['status']}: {r['reason']}")
+        if len(rows) > CHART_ROWS:
+            box.label(text=f"... and {len(rows) - CHART_ROWS} more charts")
+
+
 def menu_entry(self, context):
     self.layout.separator()
     self.layout.operator(UV_OT_uvflat_unwrap.bl_idname, text="uvflat Unwrap")
 
 
-# (menu class name in bpy.types, function) — both verified on Blender 4.2 and 5.0
-MENUS = (("VIEW3D_MT_uv_map", menu_entry), ("IMAGE_MT_uvs_unwrap", menu_entry))
+# (menu class name in bpy.types, function). Only the UV editor's Unwrap menu: the 3D
+# Viewport's UV menu (VIEW3D_MT_uv_map) inlines it with ``menu_contents``, so an entry there as
+# well would show the operator twice.
+MENUS = (("IMAGE_MT_uvs_unwrap", menu_entry),)
 
-classes = (UVFLAT_PG_defaults, UVFLAT_PT_defaults)
+# Default shortcut, rebindable in Preferences > Keymap: (keymap name, space type, key, modifiers).
+# Shift+Alt+U: free in both the mesh edit mode and the UV editor keymaps.
+KEYMAP_ITEMS = (
+    ("Mesh", "EMPTY", "U", {"shift": True, "alt": True}),
+    ("UV Editor", "EMPTY", "U", {"shift": True, "alt": True}),
+)
+_addon_keymaps: list = []
+
+classes = (UVFLAT_PG_defaults, UVFLAT_PT_defaults, UVFLAT_PT_result)
 
 
 def register_menus():
@@ -56,3 +173,23 @@ def unregister_menus():
         menu = getattr(bpy.types, menu_name, None)
         if menu is not None:
             menu.remove(func)
+
+
+def register_keymaps():
+    """Add the default shortcut to the add-on keyconfig (absent in background mode)."""
+    keyconfig = bpy.context.window_manager.keyconfigs.addon
+    if keyconfig is None:
+        return
+    for km_name, space_type, key, modifiers in KEYMAP_ITEMS:
+        km = keyconfig.keymaps.new(name=km_name, space_type=space_type)
+        kmi = km.keymap_items.new(UV_OT_uvflat_unwrap.bl_idname, key, "PRESS", **modifiers)
+        _addon_keymaps.append((km, kmi))
+
+
+def unregister_keymaps():
+    for km, kmi in _addon_keymaps:
+        try:
+            km.keymap_items.remove(kmi)
+        except (ReferenceError, RuntimeError):  # keyconfig already freed
+            pass
+    _addon_keymaps.clear()

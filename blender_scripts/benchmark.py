@@ -97,7 +97,7 @@ def run_once(obj, kind, method):
     t0 = time.perf_counter()
     try:
         if kind == "uvflat":
-            result = bpy.ops.uv.uvflat_unwrap(method=method, pack=True, margin=MARGIN)
+            result = bpy.ops.uv.uvflat_unwrap(method=method, pack="ALL", shape_method="AABB", margin=MARGIN)
         else:
             result = bpy.ops.uv.unwrap(method=method, margin=MARGIN)
         error = None if "FINISHED" in result else f"returned {set(result)}"

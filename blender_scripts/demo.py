@@ -61,7 +61,7 @@ def run(addon, uvflat, obj, name, methods, out, size):
         mesh.uv_layers.active = layer
         common.edit_mode([obj])
         t0 = time.perf_counter()
-        result = bpy.ops.uv.uvflat_unwrap(method=method, pack=True, margin=0.01)
+        result = bpy.ops.uv.uvflat_unwrap(method=method, pack="ALL", margin=0.01)
         seconds = time.perf_counter() - t0
         common.object_mode()
         summary = addon.engine.LAST_SUMMARY

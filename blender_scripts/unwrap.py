@@ -1,10 +1,15 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
-"""Unwrap a mesh file headlessly with uvflat and write the result and a UV layout PNG.
+"""Unwrap mesh files headlessly with uvflat and write the results and UV layout PNGs.
 
     .venv/bin/python blender_scripts/unwrap.py INPUT OUTPUT [--method lscm] [options]
+    .venv/bin/python blender_scripts/unwrap.py INPUT... OUTPUT_FOLDER [--jobs N] [--format glb]
 
-INPUT: .obj, .ply, .off or .blend (first mesh object).  OUTPUT: .obj, .glb or .blend, with the
-new UV map; the UV layout is drawn to OUTPUT's name with ``_uv.png`` (or ``--png``).
+INPUT: .obj, .ply, .off or .blend; every mesh object of the file is unwrapped.  OUTPUT: .obj,
+.glb or .blend, with the new UV map; the UV layout is drawn to OUTPUT's name with ``_uv.png``
+(or ``--png``).  Several inputs, a folder or a glob pattern make a batch: every file is
+unwrapped by its own worker process (``--jobs``, default: the number of cores) into
+OUTPUT_FOLDER/<name>.<format>, with one summary line per file and a final table; the exit
+status is non-zero if any file failed.  ``--report report.json`` writes every chart report.
 Goes through the add-on's own operator (``bpy.ops.uv.uvflat_unwrap``), registered from
 ``addon/``.
 """
@@ -12,14 +17,21 @@ Goes through the add-on's own operator (``bpy.ops.uv.uvflat_unwrap``), registere
 from __future__ import annotations
 
 import argparse
+import glob
+import json
 import math
+import os
+import subprocess
 import sys
+import tempfile
 import time
+from concurrent.futures import ThreadPoolExecutor, as_completed
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import bpy  # noqa: E402
+import numpy as np  # noqa: E402
 
 import common  # noqa: E402
 
@@ -28,12 +40,30 @@ def log(message, t0=[time.perf_counter()]):  # noqa: B006 - start time of the ru
     print(f"[{time.perf_counter() - t0[0]:7.2f} s] {message}", flush=True)
 
 
+INPUT_SUFFIXES = (".obj", ".ply", ".off", ".blend")
+OUTPUT_SUFFIXES = (".obj", ".glb", ".blend")
+MAX_LAYOUT_SIZE = 16384
+
+
+class UsageError(Exception):
+    """A bad command-line argument: reported as one line, exit status 1, nothing written."""
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):  # one line and status 1 instead of argparse's usage + status 2
+        raise UsageError(message)
+
+
 def parse_args(argv):
-    parser = argparse.ArgumentParser(
+    """Parsed arguments; ``args.batch`` tells a batch (several inputs, a folder or a glob)
+    from a single file, whose ``args.inputs`` are then the expanded input files."""
+    parser = _Parser(
         description="Unwrap a mesh file headlessly with uvflat.",
         formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    parser.add_argument("input", type=Path, help=".obj, .ply, .off or .blend")
-    parser.add_argument("output", type=Path, help=".obj, .glb or .blend")
+    parser.add_argument("paths", nargs="+", metavar="INPUT... OUTPUT",
+                        help=f"input files ({', '.join(INPUT_SUFFIXES)}), folders or glob "
+                             f"patterns, then the output file ({', '.join(OUTPUT_SUFFIXES)}) or, "
+                             "for several inputs, the output folder")
     parser.add_argument("--method", default="lscm",
                         help="uvflat method (tutte, harmonic, mean_value, lscm, spectral, ...)")
     parser.add_argument("--boundary", choices=("circle", "square", "virtual", "free", "convex"),
@@ -49,11 +79,22 @@ def parse_args(argv):
                              "method's)")
     parser.add_argument("--seams-from-islands", action="store_true",
                         help="mark seams from the islands of the input's active UV map first")
-    parser.add_argument("--no-pack", action="store_true",
-                        help="do not pack (islands are fitted to the previous UVs)")
+    parser.add_argument("--pack", choices=("around", "all", "off"), default=None,
+                        help="around: pack the new islands around the other islands of the UV "
+                             "map; all: over the whole tile; off: fit them to the previous UVs "
+                             "(default around)")
+    parser.add_argument("--no-pack", action="store_true", help="same as --pack off")
     parser.add_argument("--margin", type=float, default=0.001, help="packing margin")
+    parser.add_argument("--margin-method", choices=("scaled", "add", "fraction"),
+                        default="scaled", help="packing margin method")
+    parser.add_argument("--shape-method", choices=("concave", "convex", "aabb"),
+                        default="concave", help="island shape used by the packer")
+    parser.add_argument("--no-rotate", action="store_true", help="do not rotate islands to pack")
+    parser.add_argument("--no-correct-aspect", action="store_true",
+                        help="ignore the aspect ratio of the active material's image texture")
     parser.add_argument("--uv-name", default=None,
-                        help="write into a new UV map of this name (default: the active one)")
+                        help="write into a new UV map of this name (default: the active one); "
+                             "it becomes the active and the render UV map")
     parser.add_argument("--auto-seams", action=argparse.BooleanOptionalAction, default=True,
                         help="cut closed and higher-genus charts open through cone "
                              "singularities (a closed scan unwraps with no seams marked)")
@@ -72,15 +113,199 @@ def parse_args(argv):
                         help="mark the cuts automatic seams made as edge seams in the output")
     parser.add_argument("--png", type=Path, default=None, help="UV layout image path")
     parser.add_argument("--size", type=int, default=1024, help="UV layout image size")
-    return parser.parse_args(argv)
+    parser.add_argument("--report", type=Path, default=None,
+                        help="write every chart report (per file and object) to this JSON file")
+    parser.add_argument("--jobs", type=int, default=None,
+                        help="batch: worker processes (default: the number of cores)")
+    parser.add_argument("--format", choices=("obj", "glb", "blend"), default="obj",
+                        help="batch: format of the files written into the output folder")
+    args = parser.parse_args(argv)
+    if len(args.paths) < 2:
+        raise UsageError("expected INPUT... OUTPUT (at least two paths)")
+    patterns, args.output = args.paths[:-1], Path(args.paths[-1])
+    args.parser = parser
+    args.batch = (len(patterns) > 1 or Path(patterns[0]).is_dir()
+                  or (glob.has_magic(patterns[0]) and not Path(patterns[0]).exists()))
+    args.inputs = expand_inputs(patterns) if args.batch else [Path(patterns[0])]
+    return args
 
 
-def export(obj, path: Path):
+# Options handled by the batch driver itself, not handed to each file's worker.
+_DRIVER_ONLY = {"paths", "help", "report", "jobs", "format", "png"}
+
+
+def worker_argv(parser_args, parser):
+    """The command-line options of ``parser_args`` that differ from their defaults, as flags
+    for a worker process (every option the parser knows, so new options pass through)."""
+    out = []
+    for action in parser._actions:
+        dest = action.dest
+        if dest in _DRIVER_ONLY or not action.option_strings:
+            continue
+        value = getattr(parser_args, dest)
+        if value == action.default:
+            continue
+        flag = action.option_strings[-1]
+        if action.nargs == 0:
+            out.append(flag)
+        else:
+            out += [flag, str(value)]
+    return out
+
+
+def expand_inputs(patterns):
+    """Files named by ``patterns``: files, folders (their supported files) and glob patterns.
+    Raises UsageError naming a pattern that matches nothing usable."""
+    files = []
+    for pattern in patterns:
+        path = Path(pattern)
+        if path.is_dir():
+            found = sorted(p for p in path.iterdir()
+                           if p.is_file() and p.suffix.lower() in INPUT_SUFFIXES)
+            if not found:
+                raise UsageError(f"input folder {path} holds no {', '.join(INPUT_SUFFIXES)} file")
+            files += found
+        elif path.exists():
+            files.append(path)
+        elif glob.has_magic(pattern):
+            found = sorted(Path(p) for p in glob.glob(pattern, recursive=True)
+                           if Path(p).is_file() and Path(p).suffix.lower() in INPUT_SUFFIXES)
+            if not found:
+                raise UsageError(f"input pattern {pattern} matches no "
+                                 f"{', '.join(INPUT_SUFFIXES)} file")
+            files += found
+        else:
+            raise UsageError(f"input {pattern} does not exist")
+    unique = list(dict.fromkeys(p.resolve() for p in files))
+    stems = {}
+    for p in unique:
+        if p.stem in stems:
+            raise UsageError(f"inputs {stems[p.stem]} and {p} would both be written as "
+                             f"{p.stem}.*: rename one")
+        stems[p.stem] = p
+    return unique
+
+
+def _check_writable_file(path: Path, what: str):
+    """Raise UsageError unless ``path`` can be created (its folder exists or can be made)."""
+    if path.is_dir():
+        raise UsageError(f"{what} {path} is a folder")
+    folder = path.resolve().parent
+    ancestor = folder
+    while not ancestor.exists():
+        ancestor = ancestor.parent
+    if not ancestor.is_dir():
+        raise UsageError(f"{what} {path}: {ancestor} is not a folder")
+    if not os.access(ancestor, os.W_OK | os.X_OK):
+        raise UsageError(f"{what} {path}: folder {ancestor} is not writable")
+    if path.exists() and not os.access(path, os.W_OK):
+        raise UsageError(f"{what} {path} is not writable")
+
+
+def _check_range(flag: str, value, prop, method=None) -> None:
+    """Raise UsageError when ``value`` is outside the bpy property's min/max or items."""
+    keywords = getattr(prop, "keywords", {})
+    items = keywords.get("items")
+    if items and value not in [i[0] for i in items]:
+        of = f" is not an option of {method}" if method else ""
+        raise UsageError(f"{flag} {value!r}{of} (expected one of "
+                         f"{', '.join(i[0] for i in items)})")
+    low, high = keywords.get("min"), keywords.get("max")
+    if low is not None and value < low or high is not None and value > high:
+        bounds = (f"from {low} to {high}" if low is not None and high is not None
+                  else f"at least {low}" if low is not None else f"at most {high}")
+        raise UsageError(f"{flag} {value}: out of range (must be {bounds})")
+
+
+def check_args(args, methods, core_methods):
+    """Check every argument before anything is read or written; returns
+    ``(method property values, pack property values)``. Raises UsageError naming the argument.
+    """
+    for path in args.inputs:
+        if not path.exists():
+            raise UsageError(f"input {path} does not exist")
+        if not path.is_file():
+            raise UsageError(f"input {path} is not a file")
+        if path.suffix.lower() not in INPUT_SUFFIXES:
+            raise UsageError(f"input {path}: unsupported format {path.suffix or '(none)'} "
+                             f"(use {', '.join(INPUT_SUFFIXES)})")
+    if args.batch:
+        if args.output.exists() and not args.output.is_dir():
+            raise UsageError(f"output folder {args.output} is a file")
+        _check_writable_file(args.output / "probe", "output folder")
+        if args.png is not None:
+            raise UsageError("--png names one image: in a batch, each layout is written beside "
+                             "its output")
+        if args.jobs is not None and args.jobs < 1:
+            raise UsageError(f"--jobs {args.jobs}: must be at least 1")
+    else:
+        if args.output.suffix.lower() not in OUTPUT_SUFFIXES:
+            raise UsageError(f"output {args.output}: unsupported format "
+                             f"{args.output.suffix or '(none)'} (use {', '.join(OUTPUT_SUFFIXES)})")
+        _check_writable_file(args.output, "output")
+        png = args.png or args.output.with_name(args.output.stem + "_uv.png")
+        if png.suffix.lower() != ".png":
+            raise UsageError(f"--png {png}: must end in .png")
+        _check_writable_file(png, "--png")
+    if args.report is not None:
+        if args.report.suffix.lower() != ".json":
+            raise UsageError(f"--report {args.report}: must end in .json")
+        _check_writable_file(args.report, "--report")
+    if not 1 <= args.size <= MAX_LAYOUT_SIZE:
+        raise UsageError(f"--size {args.size}: out of range (must be from 1 to {MAX_LAYOUT_SIZE})")
+    if args.uv_name is not None and not 1 <= len(args.uv_name.encode()) <= 63:
+        raise UsageError(f"--uv-name {args.uv_name!r}: must be 1 to 63 bytes long")
+
+    known = [m.id for m in methods.METHODS if m.id in core_methods]
+    if args.method not in known:
+        raise UsageError(f"--method {args.method!r}: unknown; available: {', '.join(known)}")
+    info = methods.METHOD_BY_ID[args.method]
+    # command-line options onto the operator properties of the chosen method, matched by the
+    # keyword each property hands to uvflat.unwrap (tolerances are given as powers of ten)
+    given = {"boundary": ("--boundary", args.boundary), "solver": ("--solver", args.solver),
+             "max_iterations": ("--max-iterations", args.max_iterations),
+             "tolerance": ("--tolerance-exponent", args.tolerance_exponent)}
+    method_props = {}
+    for keyword, (flag, value) in given.items():
+        if value is None:
+            continue
+        keys = [k for k in info.options if methods.OPTIONS[k].keyword == keyword]
+        if not keys:
+            raise UsageError(f"{flag} is not an option of {args.method}")
+        _check_range(flag, value, methods.OPTIONS[keys[0]].make_property(), args.method)
+        method_props[keys[0]] = value
+
+    if args.no_pack and args.pack not in (None, "off"):
+        raise UsageError(f"--no-pack contradicts --pack {args.pack}")
+    mode = "off" if args.no_pack else (args.pack or "around")
+    pack_props = {"pack": mode.upper(), "margin": args.margin,
+                  "margin_method": args.margin_method.upper(),
+                  "shape_method": args.shape_method.upper(), "rotate": not args.no_rotate,
+                  "correct_aspect": not args.no_correct_aspect}
+    defaults = methods.common_properties()
+    _check_range("--margin", args.margin, defaults["margin"])
+    if not (math.isfinite(args.max_stretch) and args.max_stretch > 1.0):
+        raise UsageError(f"--max-stretch {args.max_stretch}: must be a finite number greater than 1")
+    if not 0 <= args.max_cones <= 1000:
+        raise UsageError(f"--max-cones {args.max_cones}: must be between 0 and 1000")
+    if args.sharp_angle is not None and not (math.isfinite(args.sharp_angle)
+                                             and 0.0 < args.sharp_angle < 180.0):
+        raise UsageError(f"--sharp-angle {args.sharp_angle}: must be between 0 and 180 degrees")
+    # automatic seams travel with the packing properties to the operator
+    pack_props.update(auto_seams=args.auto_seams, max_stretch=args.max_stretch,
+                      max_cones=args.max_cones, mark_seams=args.mark_seams,
+                      avoid_group=args.avoid_group, prefer_sharp=args.sharp_angle is not None)
+    if args.sharp_angle is not None:
+        pack_props["sharp_angle"] = math.radians(args.sharp_angle)
+    return method_props, pack_props
+
+
+def export(objects, path: Path):
     suffix = path.suffix.lower()
     path.parent.mkdir(parents=True, exist_ok=True)
     for o in bpy.context.view_layer.objects:
-        o.select_set(o == obj)
-    bpy.context.view_layer.objects.active = obj
+        o.select_set(o in objects)
+    bpy.context.view_layer.objects.active = objects[0]
     if suffix == ".obj":
         bpy.ops.wm.obj_export(filepath=str(path), export_selected_objects=True, export_uv=True,
                               export_materials=False)
@@ -91,90 +316,226 @@ def export(obj, path: Path):
         bpy.ops.export_scene.gltf(filepath=str(path), export_format="GLB", use_selection=True)
     elif suffix == ".blend":
         bpy.ops.wm.save_as_mainfile(filepath=str(path.resolve()), copy=True)
-    else:
-        raise SystemExit(f"unsupported output format {suffix} (use .obj, .glb or .blend)")
+    else:  # checked by check_args before anything was read
+        raise RuntimeError(f"unsupported output format {suffix}")
 
 
-def main(argv=None):
-    args = parse_args(sys.argv[1:] if argv is None else argv)
-    if args.output.suffix.lower() not in (".obj", ".glb", ".blend"):
-        raise SystemExit(f"unsupported output format {args.output.suffix} (use .obj, .glb or .blend)")
-    if not (math.isfinite(args.max_stretch) and args.max_stretch > 1.0):
-        raise SystemExit(f"--max-stretch {args.max_stretch}: must be a finite number greater than 1")
-    if not 0 <= args.max_cones <= 1000:
-        raise SystemExit(f"--max-cones {args.max_cones}: must be between 0 and 1000")
-    if args.sharp_angle is not None and not (math.isfinite(args.sharp_angle)
-                                             and 0.0 < args.sharp_angle < 180.0):
-        raise SystemExit(f"--sharp-angle {args.sharp_angle}: must be between 0 and 180 degrees")
-    common.reset_scene()
-    addon = common.load_addon()
+class ProgressBar:
+    """Charts solved so far, as a tqdm bar when tqdm is installed, else a plain text bar."""
+
+    def __init__(self, label):
+        self.label = label
+        self._bar = None
+        self._last = -1
+        try:
+            import tqdm
+        except ImportError:
+            self._tqdm = None
+        else:
+            self._tqdm = tqdm.tqdm
+
+    def __call__(self, objects_done, objects_total, charts_done, charts_total):
+        if not charts_total:
+            return
+        if self._tqdm is not None:
+            if self._bar is None:
+                self._bar = self._tqdm(total=charts_total, desc=self.label, unit="chart",
+                                       leave=False, file=sys.stdout)
+            self._bar.update(charts_done - self._bar.n)
+            return
+        percent = 100 * charts_done // charts_total
+        if percent != self._last:
+            self._last = percent
+            filled = percent // 5
+            print(f"\r{self.label} [{'#' * filled}{'.' * (20 - filled)}] {charts_done}/"
+                  f"{charts_total} charts", end="", flush=True)
+
+    def close(self):
+        if self._bar is not None:
+            self._bar.close()
+        elif self._last >= 0:
+            print(flush=True)
+
+
+def fail(message) -> int:
+    print(f"unwrap.py: error: {message}", file=sys.stderr, flush=True)
+    return 1
+
+
+def chart_report(chart):
+    """A chart report as plain JSON values (NaN and infinity as strings)."""
+    out = {}
+    for key, value in chart.as_dict().items():
+        if isinstance(value, float) and value != value:
+            value = "nan"
+        elif isinstance(value, float) and value in (float("inf"), float("-inf")):
+            value = "inf" if value > 0 else "-inf"
+        out[key] = value
+    return out
+
+
+def run_single(args, addon, method_props, pack_props) -> int:
+    """Unwrap every mesh object of ``args.inputs[0]`` into ``args.output``."""
     mesh_io = addon.mesh_io
-    import uvflat
-
-    known = [m.id for m in addon.methods.METHODS if m.id in uvflat.METHODS]
-    if args.method not in known:
-        raise SystemExit(f"unknown method {args.method!r}; available: {', '.join(known)}")
-    # command-line options onto the operator properties of the chosen method, matched by the
-    # keyword each property hands to uvflat.unwrap (tolerances are given as powers of ten)
-    by_keyword = {"boundary": args.boundary, "solver": args.solver,
-                  "max_iterations": args.max_iterations, "tolerance": args.tolerance_exponent}
-    method_props = {}
-    for key in addon.methods.METHOD_BY_ID[args.method].options:
-        value = by_keyword.get(addon.methods.OPTIONS[key].keyword)
-        if value is not None:
-            method_props[key] = value
+    source = args.inputs[0]
+    started = time.perf_counter()
+    log(f"loading {source}")
     try:
-        for key, value in method_props.items():
-            # validate enum values against the property definition before touching the mesh
-            prop = addon.methods.OPTIONS[key].make_property()
-            items = getattr(prop, "keywords", {}).get("items")
-            if items and value not in [i[0] for i in items]:
-                flag = addon.methods.OPTIONS[key].keyword.replace("_", "-")
-                raise ValueError(f"--{flag} {value!r} "
-                                 f"is not an option of {args.method}: {[i[0] for i in items]}")
-    except ValueError as ex:
-        raise SystemExit(str(ex)) from None
-
-    log(f"loading {args.input}")
-    obj = common.load_mesh_object(args.input)
-    mesh = obj.data
-    log(f"loaded '{obj.name}': {len(mesh.vertices)} vertices, {len(mesh.polygons)} faces")
+        common.load_mesh_object(source)
+    except (ValueError, RuntimeError, OSError) as ex:
+        return fail(f"input {source}: {ex}")
+    objects = [o for o in bpy.context.scene.objects if o.type == "MESH"]
+    for obj in objects:
+        log(f"loaded '{obj.name}': {len(obj.data.vertices)} vertices, "
+            f"{len(obj.data.polygons)} faces")
 
     if args.seams_from_islands:
-        if mesh_io.active_uv_name(mesh) is None:
-            raise SystemExit(f"{args.input}: --seams-from-islands needs a UV map, the mesh has none")
-        common.seams_from_islands(obj)
-        log(f"seams from UV islands: {mesh_io.read_seams(mesh).shape[0]} seam edges")
+        for obj in objects:
+            if mesh_io.active_uv_name(obj.data) is None:
+                return fail(f"input {source}: --seams-from-islands needs a UV map, "
+                            f"'{obj.name}' has none")
+        for obj in objects:
+            common.seams_from_islands(obj)
+            log(f"'{obj.name}': seams from UV islands: {mesh_io.read_seams(obj.data).shape[0]} "
+                "seam edges")
     if args.uv_name:
-        layer = mesh.uv_layers.get(args.uv_name) or mesh.uv_layers.new(name=args.uv_name)
-        mesh.uv_layers.active = layer
+        for obj in objects:
+            mesh = obj.data
+            layer = mesh.uv_layers.get(args.uv_name) or mesh.uv_layers.new(name=args.uv_name)
+            mesh.uv_layers.active = layer
 
-    common.edit_mode([obj])
-    log(f"unwrapping with {args.method}")
-    auto_props = {"auto_seams": args.auto_seams, "max_stretch": args.max_stretch,
-                  "max_cones": args.max_cones, "mark_seams": args.mark_seams,
-                  "avoid_group": args.avoid_group,
-                  "prefer_sharp": args.sharp_angle is not None}
-    if args.sharp_angle is not None:
-        auto_props["sharp_angle"] = math.radians(args.sharp_angle)
-    result = bpy.ops.uv.uvflat_unwrap(
-        method=args.method, pack=not args.no_pack, margin=args.margin, **method_props,
-        **auto_props)
+    common.edit_mode(objects)
+    log(f"unwrapping {len(objects)} object{'s' * (len(objects) != 1)} with {args.method}")
+    bar = ProgressBar(f"{source.name} {args.method}")
+    addon.engine.PROGRESS_HOOK = bar
+    try:
+        result = bpy.ops.uv.uvflat_unwrap(method=args.method, **pack_props, **method_props)
+    finally:
+        addon.engine.PROGRESS_HOOK = None
+        bar.close()
     common.object_mode()
     summary = addon.engine.LAST_SUMMARY
     if "FINISHED" not in result or summary is None:
         log(f"unwrap failed ({result}); nothing written")
         return 1
     log(summary.line())
+    # the map just written is the one exporters and renderers must use: active, render map,
+    # and first (glTF writes the maps in order, the first is TEXCOORD_0)
+    for obj in objects:
+        written = mesh_io.active_uv_name(obj.data)
+        if written is not None:
+            mesh_io.make_first_uv_map(obj.data, written)
 
-    export(obj, args.output)
+    try:
+        export(objects, args.output)
+    except (RuntimeError, OSError) as ex:
+        return fail(f"output {args.output}: {ex}")
     log(f"wrote {args.output}")
     png = args.png or args.output.with_name(args.output.stem + "_uv.png")
-    _, _, face_sizes = mesh_io.read_topology(mesh)
-    common.save_layout(png, mesh_io.read_uv(mesh), face_sizes, size=args.size,
-                       title=f"{obj.name} - {args.method}")
+    uvs, sizes = [], []
+    for obj in objects:
+        _, _, face_sizes = mesh_io.read_topology(obj.data)
+        if mesh_io.active_uv_name(obj.data) is not None:
+            uvs.append(mesh_io.read_uv(obj.data))
+            sizes.append(face_sizes)
+    try:
+        common.save_layout(png, np.concatenate(uvs) if uvs else np.zeros((0, 2)),
+                           np.concatenate(sizes) if sizes else np.zeros(0, dtype=np.int64),
+                           size=args.size, title=f"{source.name} - {args.method}")
+    except OSError as ex:
+        return fail(f"--png {png}: {ex}")
     log(f"wrote {png}")
-    return 2 if summary.failed else 0
+    status = 2 if summary.failed else 0
+    if args.report is not None:
+        report = {
+            "file": str(source), "output": str(args.output), "method": args.method,
+            "status": "charts failed" if status else "ok", "seconds": time.perf_counter() - started,
+            "summary": summary.line(), "non_manifold_edges": summary.non_manifold_edges,
+            "objects": {name: [chart_report(c) for c in r.charts]
+                        for name, r in summary.results.items()},
+        }
+        try:
+            args.report.parent.mkdir(parents=True, exist_ok=True)
+            args.report.write_text(json.dumps(report, indent=1))
+        except OSError as ex:
+            return fail(f"--report {args.report}: {ex}")
+        log(f"wrote {args.report}")
+    return status
+
+
+def _file_line(source, rc, report, stderr, out):
+    if report is None:
+        last = [line for line in stderr.strip().splitlines() if line.strip()]
+        return {"file": source.name, "status": "error", "objects": 0, "charts": 0, "failed": 0,
+                "flips": 0, "seconds": 0.0, "output": "-",
+                "detail": last[-1] if last else f"exit status {rc}"}
+    charts = [c for cs in report["objects"].values() for c in cs]
+    return {"file": source.name, "status": report["status"], "objects": len(report["objects"]),
+            "charts": len(charts), "failed": sum(c["status"] == "failed" for c in charts),
+            "flips": sum(int(c["flips"]) for c in charts), "seconds": report["seconds"],
+            "output": str(out), "detail": report["summary"]}
+
+
+def run_batch(args) -> int:
+    """One worker process per file (``--jobs`` at a time); a line per file, a final table."""
+    args.output.mkdir(parents=True, exist_ok=True)
+    jobs = args.jobs or os.cpu_count() or 1
+    forwarded = worker_argv(args, args.parser)
+    rows, reports, worst = [], [], 0
+    with tempfile.TemporaryDirectory(prefix="uvflat-batch-") as tmp:
+        def work(source):
+            out = args.output / f"{source.stem}.{args.format}"
+            report = Path(tmp) / f"{source.stem}.json"
+            cmd = [sys.executable, str(Path(__file__).resolve()), str(source), str(out),
+                   *forwarded, "--report", str(report)]
+            r = subprocess.run(cmd, capture_output=True, text=True, stdin=subprocess.DEVNULL)
+            data = json.loads(report.read_text()) if report.is_file() else None
+            return source, out, r.returncode, data, r.stderr
+
+        log(f"{len(args.inputs)} files, {jobs} worker process{'es' * (jobs != 1)}")
+        with ThreadPoolExecutor(max_workers=jobs) as pool:
+            futures = [pool.submit(work, source) for source in args.inputs]
+            for future in as_completed(futures):
+                source, out, rc, data, stderr = future.result()
+                row = _file_line(source, rc, data, stderr, out)
+                rows.append(row)
+                if data is not None:
+                    reports.append(data)
+                worst = max(worst, 1 if rc not in (0, 2) else rc)
+                log(f"{row['file']}: {row['status']}: {row['detail']}")
+    rows.sort(key=lambda r: r["file"])
+    width = max(len(r["file"]) for r in rows)
+    print(f"{'file':<{width}}  {'status':<13} {'objects':>7} {'charts':>7} {'failed':>6} "
+          f"{'flips':>6} {'seconds':>8}  output")
+    for r in rows:
+        print(f"{r['file']:<{width}}  {r['status']:<13} {r['objects']:>7} {r['charts']:>7} "
+              f"{r['failed']:>6} {r['flips']:>6} {r['seconds']:>8.2f}  {r['output']}")
+    n_bad = sum(r["status"] != "ok" for r in rows)
+    print(f"{len(rows)} files, {len(rows) - n_bad} ok, {n_bad} not", flush=True)
+    if args.report is not None:
+        args.report.parent.mkdir(parents=True, exist_ok=True)
+        args.report.write_text(json.dumps({"files": sorted(reports, key=lambda d: d["file"]),
+                                           "table": rows}, indent=1))
+        log(f"wrote {args.report}")
+    return worst
+
+
+def main(argv=None):
+    try:
+        args = parse_args(sys.argv[1:] if argv is None else argv)
+    except UsageError as ex:
+        return fail(ex)
+    common.reset_scene()
+    addon = common.load_addon()
+    import uvflat
+
+    try:
+        method_props, pack_props = check_args(args, addon.methods, uvflat.METHODS)
+    except UsageError as ex:
+        return fail(ex)
+    if args.batch:
+        return run_batch(args)
+    return run_single(args, addon, method_props, pack_props)
 
 
 if __name__ == "__main__":

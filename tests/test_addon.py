@@ -273,9 +273,9 @@ def shared_mesh(name):
 def test_installed_extension_is_enabled_with_menus(ext):
     assert ext.__name__.startswith("bl_ext.")
     assert bpy.ops.uv.uvflat_unwrap.idname() == "UV_OT_uvflat_unwrap"
-    for menu_name in ("VIEW3D_MT_uv_map", "IMAGE_MT_uvs_unwrap"):
-        menu = getattr(bpy.types, menu_name)
-        assert ext.ui.menu_entry in menu._dyn_ui_initialize(), f"no entry in {menu_name}"
+    # appended to the UV editor's Unwrap menu only: the 3D Viewport's UV menu inlines it
+    assert ext.ui.menu_entry in bpy.types.IMAGE_MT_uvs_unwrap._dyn_ui_initialize()
+    assert ext.ui.menu_entry not in bpy.types.VIEW3D_MT_uv_map._dyn_ui_initialize()
     assert hasattr(bpy.types.Scene, "uvflat")
     assert "UVFLAT_PT_defaults" in dir(bpy.types)
 
@@ -324,7 +324,7 @@ def test_shared_meshes_no_flips(ext, scene, mesh, method, options):
                  expect_no_flips=(method != "lscm" or mesh in LSCM_NO_FLIP_MESHES))
 
 
-@pytest.mark.parametrize("pack", [True, False])
+@pytest.mark.parametrize("pack", ["AROUND", "ALL", "OFF"])
 def test_unselected_faces_unchanged(ext, scene, pack):
     obj = suzanne()
     io = ext.mesh_io
@@ -342,7 +342,7 @@ def test_unselected_faces_unchanged(ext, scene, pack):
     assert not np.array_equal(after.uv[corners], before.uv[corners])
 
 
-@pytest.mark.parametrize("pack", [True, False])
+@pytest.mark.parametrize("pack", ["AROUND", "ALL", "OFF"])
 def test_pinned_uvs_unchanged(ext, scene, pack):
     obj = suzanne()
     io = ext.mesh_io
@@ -403,7 +403,7 @@ def test_failed_chart_keeps_uvs_exactly(ext, scene, monkeypatch):
     monkeypatch.setattr(uvflat, "unwrap", unwrap_with_failure)
     obj = suzanne()
     before = read(ext, obj)
-    result, summary = unwrap(ext, [obj], method="lscm", pack=True)
+    result, summary = unwrap(ext, [obj], method="lscm", pack="ALL")
     assert result == {"FINISHED"}
     assert any(p.reason == "test failure" for p in summary.failed), summary.line()
     after = read(ext, obj)
@@ -445,7 +445,7 @@ def test_error_leaves_every_uv_map_unchanged(ext, scene, monkeypatch, stage):
 
         monkeypatch.setattr(ext.engine, "_pack", failing_pack)
     with pytest.raises(RuntimeError, match="injected"):
-        unwrap(ext, [with_uv, without_uv], method="lscm", pack=True)
+        unwrap(ext, [with_uv, without_uv], method="lscm", pack="ALL")
     for o in (with_uv, without_uv):
         assert io.uv_map_names(o.data) == list(before[o.name]), f"{o.name}: UV maps added/removed"
         for name, uv in before[o.name].items():
@@ -508,7 +508,7 @@ def test_multi_object_edit_mode(ext, scene):
 def test_pack_off_keeps_islands_near(ext, scene):
     obj = suzanne()
     before = read(ext, obj)
-    result, summary = unwrap(ext, [obj], method="lscm", pack=False)
+    result, summary = unwrap(ext, [obj], method="lscm", pack="OFF")
     assert result == {"FINISHED"}
     after = read(ext, obj)
     chart = np.asarray(summary.results[obj.name].chart)
@@ -723,3 +723,600 @@ def test_abf_quality_on_charts_with_holes(ext, scene, mesh):
     """Charts with holes (Blender fills holes before unwrapping): ABF no worse than
     ANGLE_BASED and flip-free."""
     _compare_with_blender(ext, shared_mesh(mesh), "abf", "ANGLE_BASED", "conformal")
+
+
+# ---------------------------------------------------------------------------------------------
+# Menus, invoke and keymap (stand-ins for what background mode lacks: windows, events, menus)
+
+
+class _RecordingLayout:
+    """Stand-in for a menu's UILayout: records operator ids, expands ``menu_contents``."""
+
+    def __init__(self, expand):
+        self.operators = []
+        self._expand = expand
+        self.operator_context = "EXEC_REGION_WIN"
+
+    def operator(self, idname, **_kwargs):
+        self.operators.append(idname)
+        return SimpleNamespace()
+
+    def menu_contents(self, name):
+        self._expand(name, self)
+
+    def __getattr__(self, _name):  # separator, menu, template_* ...: nothing to record
+        return lambda *args, **kwargs: SimpleNamespace()
+
+
+def _draw_menu(menu_name, layout=None):
+    """Run every draw function of a menu (its own and the appended ones) on a recording
+    layout, following ``menu_contents`` into inlined menus as Blender does."""
+    layout = layout or _RecordingLayout(_draw_menu)
+    menu = getattr(bpy.types, menu_name)
+    stand_in = SimpleNamespace(layout=layout, bl_idname=menu_name)
+    for draw in menu._dyn_ui_initialize():
+        draw(stand_in, bpy.context)
+    return layout
+
+
+@pytest.mark.parametrize("menu_name", ["VIEW3D_MT_uv_map", "IMAGE_MT_uvs_unwrap"])
+def test_menu_shows_the_operator_once(ext, menu_name):
+    layout = _draw_menu(menu_name)
+    assert layout.operators.count("uv.uvflat_unwrap") == 1, layout.operators
+
+
+class _Props:
+    """Stand-in for an operator's properties: values plus the names the caller set."""
+
+    def __init__(self, values, set_names):
+        self.__dict__.update(values)
+        self._set = set(set_names)
+
+    def is_property_set(self, name):
+        return name in self._set
+
+
+def _defaults_values(ext):
+    return {name: getattr(bpy.context.scene.uvflat, name) for name in ext.methods.SETTING_NAMES}
+
+
+def test_invoke_keeps_the_properties_the_caller_set(ext, scene):
+    defaults = bpy.context.scene.uvflat
+    defaults.method, defaults.margin, defaults.pack = "lscm", 0.05, "ALL"
+    values = _defaults_values(ext)
+    values.update(method="abf", margin=0.2, pack="AROUND")
+    props = _Props(values, {"method", "margin"})  # e.g. layout.operator(...).method = "abf"
+    executed = []
+    stand_in = SimpleNamespace(properties=props, execute=lambda ctx: executed.append(ctx) or {"FINISHED"})
+    assert ext.operators.UV_OT_uvflat_unwrap.invoke(stand_in, bpy.context, None) == {"FINISHED"}
+    assert executed, "invoke did not run execute"
+    assert props.method == "abf" and props.margin == 0.2, "invoke overwrote what the caller set"
+    assert props.pack == "ALL", "a property the caller did not set must come from the sidebar"
+
+
+def test_default_keymap_entry_runs_the_method_it_names(ext, scene):
+    keyconfig = bpy.context.window_manager.keyconfigs.addon
+    items = [(km.name, kmi) for km in keyconfig.keymaps for kmi in km.keymap_items
+             if kmi.idname == "uv.uvflat_unwrap"]
+    assert {"Mesh", "UV Editor"} <= {name for name, _ in items}, items
+    kmi = items[0][1]
+    assert not kmi.properties.is_property_set("method"), "by default the sidebar's method runs"
+    # A user edits the shortcut to name a method: invoking it runs that method, whatever the
+    # sidebar says.
+    bpy.context.scene.uvflat.method = "lscm"
+    kmi.properties.method = "tutte"
+    try:
+        assert kmi.properties.is_property_set("method")
+        values = _defaults_values(ext)
+        values.update({name: getattr(kmi.properties, name) for name in ext.methods.SETTING_NAMES
+                       if kmi.properties.is_property_set(name)})
+        props = _Props(values, [n for n in ext.methods.SETTING_NAMES
+                                if kmi.properties.is_property_set(n)])
+        ran = {}
+        stand_in = SimpleNamespace(properties=props,
+                                   execute=lambda ctx: ran.update(method=props.method) or {"FINISHED"})
+        ext.operators.UV_OT_uvflat_unwrap.invoke(stand_in, bpy.context, None)
+        assert ran["method"] == "tutte"
+        obj = suzanne()
+        result, summary = unwrap(ext, [obj], method=ran["method"])
+        assert result == {"FINISHED"} and summary.method == "tutte"
+        assert "tutte" in summary.line()
+    finally:
+        kmi.properties.property_unset("method")
+
+
+def test_keymap_unregistered_with_the_addon(ext):
+    keyconfig = bpy.context.window_manager.keyconfigs.addon
+    count = lambda: sum(kmi.idname == "uv.uvflat_unwrap"  # noqa: E731
+                        for km in keyconfig.keymaps for kmi in km.keymap_items)
+    assert count() == len(ext.ui.KEYMAP_ITEMS)
+    ext.ui.unregister_keymaps()
+    try:
+        assert count() == 0
+    finally:
+        ext.ui.register_keymaps()
+    assert count() == len(ext.ui.KEYMAP_ITEMS)
+
+
+# ---------------------------------------------------------------------------------------------
+# Packing
+
+
+def raster(uv, face_sizes, faces, lo, hi, n=256):
+    """Grid cells (n x n over [lo, hi]^2) whose centre lies strictly inside a triangle of the
+    given faces (fan triangulation)."""
+    tris, face = fan_triangles(face_sizes)
+    tris = tris[np.asarray(faces, dtype=bool)[face]]
+    covered = np.zeros((n, n), dtype=bool)
+    step = (hi - lo) / n
+    centres = lo + (np.arange(n) + 0.5) * step
+    for a, b, c in tris:
+        p = uv[[a, b, c]]
+        i0, j0 = np.clip(((p.min(0) - lo) / step).astype(int), 0, n - 1)
+        i1, j1 = np.clip(((p.max(0) - lo) / step).astype(int) + 1, 0, n)
+        if i1 <= i0 or j1 <= j0:
+            continue
+        x, y = np.meshgrid(centres[i0:i1], centres[j0:j1], indexing="ij")
+        d = [(p[(k + 1) % 3, 0] - p[k, 0]) * (y - p[k, 1]) - (p[(k + 1) % 3, 1] - p[k, 1]) * (x - p[k, 0])
+             for k in range(3)]
+        inside = ((d[0] > 0) & (d[1] > 0) & (d[2] > 0)) | ((d[0] < 0) & (d[1] < 0) & (d[2] < 0))
+        covered[i0:i1, j0:j1] |= inside
+    return covered
+
+
+def test_pack_around_keeps_other_islands_and_does_not_overlap_them(ext, scene):
+    obj = suzanne()
+    io = ext.mesh_io
+    # Suzanne's own islands are the locked ones; move them into the lower half of the tile so
+    # that there is free space to pack into.
+    data = read(ext, obj)
+    io.write_uv(obj.data, io.active_uv_name(obj.data), data.uv * [1.0, 0.5])
+    sel = np.zeros(len(obj.data.polygons), dtype=bool)
+    sel[::4] = True
+    io.select_faces(obj.data, sel)
+    before = read(ext, obj)
+    result, summary = unwrap(ext, [obj], select_all=False, method="lscm", pack="AROUND")
+    assert result == {"FINISHED"}, summary
+    after = read(ext, obj)
+    kept = corner_mask(~sel, before.face_sizes)
+    assert np.array_equal(after.uv[kept], before.uv[kept]), "locked islands moved"
+    assert np.array_equal(io.read_face_selection(obj.data), sel), "selection changed"
+    assert not io.read_pins(obj.data).any(), "pins left behind"
+    lo, hi = min(after.uv.min(), 0.0), max(after.uv.max(), 1.0)
+    old = raster(after.uv, after.face_sizes, ~sel, lo, hi)
+    new = raster(after.uv, after.face_sizes, sel, lo, hi)
+    assert new.sum() > 50, "the new islands were not rasterised"
+    assert not (old & new).any(), f"{(old & new).sum()} cells covered by old and new islands"
+    assert after.uv[corner_mask(sel, after.face_sizes)].min() >= -1e-6
+    assert after.uv[corner_mask(sel, after.face_sizes)].max() <= 1 + 1e-6
+
+
+def test_pack_off_without_previous_uvs_lands_in_the_tile(ext, scene):
+    io = ext.mesh_io
+    # two separate n-gon disks, no UV map: nothing to fit to
+    pos, cv, fs = read_shape_ngon()
+    pos2 = pos + [10.0, 0.0, 0.0]
+    obj = common.link_mesh_object("Two", io.new_mesh("Two", np.vstack([pos, pos2]),
+                                                     np.concatenate([cv, cv + len(pos)]),
+                                                     np.concatenate([fs, fs])))
+    result, summary = unwrap(ext, [obj], method="lscm", pack="OFF")
+    assert result == {"FINISHED"}
+    data = read(ext, obj)
+    assert data.uv.min() >= -1e-6 and data.uv.max() <= 1 + 1e-6, "islands left outside 0-1"
+    half = np.arange(len(data.face_sizes)) < len(fs)
+    a = raster(data.uv, data.face_sizes, half, 0.0, 1.0)
+    b = raster(data.uv, data.face_sizes, ~half, 0.0, 1.0)
+    assert a.any() and b.any() and not (a & b).any(), "the two islands overlap"
+
+
+def test_non_manifold_edges_are_a_warning(ext, scene):
+    io = ext.mesh_io
+    # three quads on one edge (a fin) plus a fourth
+    pos = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [1, -1, 0], [0, -1, 0],
+                    [1, 0, 1], [0, 0, 1]], float)
+    cv = np.array([0, 1, 2, 3, 1, 0, 5, 4, 0, 1, 6, 7])
+    obj = common.link_mesh_object("Fin", io.new_mesh("Fin", pos, cv, [4, 4, 4]))
+    common.edit_mode([obj])
+    reports = []
+    stand_in = SimpleNamespace(report=lambda kind, text: reports.append((kind, text)),
+                               **_defaults_values(ext))
+    stand_in.method = "lscm"
+    try:
+        assert ext.operators.UV_OT_uvflat_unwrap.execute(stand_in, bpy.context) == {"FINISHED"}
+    finally:
+        common.object_mode()
+    assert ext.engine.LAST_SUMMARY.non_manifold_edges == 1
+    (kind, text), = reports
+    assert kind == {"WARNING"} and "1 non-manifold edge" in text, reports
+
+
+# ---------------------------------------------------------------------------------------------
+# Modal unwrap on a worker thread (stand-ins for the window manager, window and events)
+
+
+class _WindowManagerStandIn:
+    def __init__(self):
+        self.handlers, self.timers, self.progress = [], [], []
+
+    def event_timer_add(self, step, window=None):
+        timer = SimpleNamespace(step=step, window=window)
+        self.timers.append(timer)
+        return timer
+
+    def event_timer_remove(self, timer):
+        self.timers.remove(timer)
+
+    def modal_handler_add(self, op):
+        self.handlers.append(op)
+        return True
+
+    def progress_begin(self, lo, hi):
+        self.progress.append(("begin", lo, hi))
+
+    def progress_update(self, value):
+        self.progress.append(("update", value))
+
+    def progress_end(self):
+        self.progress.append(("end",))
+
+
+class _ContextStandIn:
+    """bpy.context with a window, a window manager and a workspace that record what the
+    operator does with them."""
+
+    def __init__(self):
+        self.window = SimpleNamespace(name="window")
+        self.window_manager = _WindowManagerStandIn()
+        self.status = []
+        self.workspace = SimpleNamespace(status_text_set=self.status.append)
+
+    def __getattr__(self, name):
+        return getattr(bpy.context, name)
+
+
+def _operator_stand_in(ext, **props):
+    """An object with the operator's own methods and properties (defaults from the sidebar)."""
+    op_cls = ext.operators.UV_OT_uvflat_unwrap
+
+    class Op:
+        invoke, execute, start_modal, modal = (op_cls.invoke, op_cls.execute,
+                                               op_cls.start_modal, op_cls.modal)
+        _status, _end_ui = op_cls._status, op_cls._end_ui
+
+        def __init__(self):
+            self.__dict__.update(_defaults_values(ext))
+            self.__dict__.update(props)
+            self._set = set(props)
+            self.properties = self
+            self.reports = []
+
+        def is_property_set(self, name):
+            return name in self._set
+
+        def report(self, kind, text):
+            self.reports.append((kind, text))
+
+    return Op()
+
+
+def _snapshot(mesh):
+    """Bytes of every UV map, pin layer, seam and selection attribute of ``mesh``."""
+    state = {}
+    for attr in mesh.attributes:
+        if (attr.domain == "CORNER" and attr.data_type == "FLOAT2") or attr.name.startswith(
+                (".pn.", ".select_", ".uv_select_", "uv_seam", ".uv_seam")):
+            width = 2 if attr.data_type == "FLOAT2" else 1
+            field = "vector" if attr.data_type == "FLOAT2" else "value"
+            dtype = np.float32 if attr.data_type == "FLOAT2" else bool
+            values = np.empty(len(attr.data) * width, dtype=dtype)
+            attr.data.foreach_get(field, values)
+            state[attr.name] = values.tobytes()
+    state["uv maps"] = tuple(layer.name for layer in mesh.uv_layers)
+    return state
+
+
+def _drive_modal(op, ctx, first_event="TIMER", timeout=120.0):
+    import time
+
+    events = [first_event]
+    t0 = time.perf_counter()
+    while True:
+        kind = events.pop(0) if events else "TIMER"
+        result = op.modal(ctx, SimpleNamespace(type=kind, value="PRESS"))
+        if result != {"RUNNING_MODAL"}:
+            return result
+        assert time.perf_counter() - t0 < timeout, "the modal unwrap never ended"
+        time.sleep(0.02)
+
+
+def test_modal_unwrap_matches_the_direct_one(ext, scene, monkeypatch):
+    monkeypatch.setattr(ext.engine, "MODAL_AFTER_SECONDS", 0.0)
+    obj = suzanne()
+    io = ext.mesh_io
+    before = read(ext, obj)
+    common.edit_mode([obj])
+    ctx = _ContextStandIn()
+    op = _operator_stand_in(ext, method="lscm", pack="OFF")
+    try:
+        assert op.invoke(ctx, SimpleNamespace(type="LEFTMOUSE", value="PRESS")) == {"RUNNING_MODAL"}
+        assert ctx.window_manager.handlers == [op] and ctx.window_manager.timers
+        # other events are swallowed while the solve runs (nothing can edit the mesh)
+        assert op.modal(ctx, SimpleNamespace(type="G", value="PRESS")) == {"RUNNING_MODAL"}
+        assert _drive_modal(op, ctx) == {"FINISHED"}
+        assert obj.mode == "EDIT"
+    finally:
+        common.object_mode()
+    modal_uv = read(ext, obj).uv
+    assert not ctx.window_manager.timers, "timer left running"
+    assert ctx.window_manager.progress[0][0] == "begin" and ctx.window_manager.progress[-1] == ("end",)
+    assert ctx.status and "Esc" in ctx.status[0] and ctx.status[-1] is None
+    assert op.reports and "lscm" in op.reports[-1][1]
+    # the same unwrap in one go gives the same UVs
+    io.write_uv(obj.data, io.active_uv_name(obj.data), before.uv)
+    result, _ = unwrap(ext, [obj], method="lscm", pack="OFF")
+    assert result == {"FINISHED"}
+    np.testing.assert_array_equal(read(ext, obj).uv, modal_uv)
+
+
+@pytest.mark.parametrize("method,options", [("lscm", {}),
+                                            ("slim", {"slim_iterations": 500})])
+def test_modal_escape_leaves_everything_byte_identical(ext, scene, monkeypatch, method, options):
+    monkeypatch.setattr(ext.engine, "MODAL_AFTER_SECONDS", 0.0)
+    obj = common.suzanne_subdivided(levels=1)
+    io = ext.mesh_io
+    obj.data.uv_layers.new(name="Second")
+    sel = np.zeros(len(obj.data.polygons), dtype=bool)
+    sel[: len(sel) // 2] = True
+    io.select_faces(obj.data, sel)
+    before = _snapshot(obj.data)
+    common.edit_mode([obj], select_all=False)
+    ctx = _ContextStandIn()
+    op = _operator_stand_in(ext, method=method, **options)
+    try:
+        assert op.invoke(ctx, SimpleNamespace(type="LEFTMOUSE", value="PRESS")) == {"RUNNING_MODAL"}
+        assert _drive_modal(op, ctx, first_event="ESC") == {"CANCELLED"}
+        assert obj.mode == "EDIT", "back in edit mode after cancelling"
+    finally:
+        common.object_mode()
+    assert not ctx.window_manager.timers and ctx.status[-1] is None
+    assert any("cancelled" in text for _, text in op.reports), op.reports
+    assert _snapshot(obj.data) == before, "cancel changed a UV map, seam or selection"
+    assert ext.engine.LAST_SUMMARY is None
+
+
+def test_small_unwrap_or_no_window_runs_directly(ext, scene):
+    obj = suzanne()
+    common.edit_mode([obj])
+    op = _operator_stand_in(ext, method="tutte")
+    ran = []
+    op.execute = lambda ctx: ran.append("execute") or {"FINISHED"}
+    try:
+        # background mode: no window
+        assert op.invoke(bpy.context, None) == {"FINISHED"}
+        # a window, but a small selection (Suzanne: 500 faces of Tutte, well under 0.5 s)
+        assert op.invoke(_ContextStandIn(), None) == {"FINISHED"}
+    finally:
+        common.object_mode()
+    assert ran == ["execute", "execute"]
+
+
+# ---------------------------------------------------------------------------------------------
+# Seeing the result: per-face distortion attributes, heat map, flipped faces, chart list
+
+
+def test_face_attributes_equal_uvflat_metrics(ext, scene):
+    import uvflat
+
+    obj = suzanne()
+    io = ext.mesh_io
+    sel = np.ones(len(obj.data.polygons), dtype=bool)
+    sel[::5] = False
+    io.select_faces(obj.data, sel)
+    result, summary = unwrap(ext, [obj], select_all=False, method="lscm", pack="ALL")
+    assert result == {"FINISHED"}
+    data = read(ext, obj)
+    solved = np.asarray(summary.results[obj.name].face_solved, dtype=bool) & sel
+    m = uvflat.metrics(data.positions, data.corner_verts, data.face_sizes, data.uv,
+                       selected=solved)
+    conformal = io.read_attribute(obj.data, "uvflat_conformal")
+    area = io.read_attribute(obj.data, "uvflat_area")
+    assert obj.data.attributes["uvflat_conformal"].domain == "FACE"
+    np.testing.assert_allclose(conformal[solved], m.face_conformal[solved], rtol=1e-4)
+    np.testing.assert_allclose(area[solved], m.face_area[solved], rtol=1e-4)
+    assert np.isnan(conformal[~sel]).all(), "faces never unwrapped have no measure"
+    flipped = io.read_attribute(obj.data, "uvflat_flipped")
+    assert flipped.shape == (len(sel),) and not flipped[~sel].any()
+    colors = obj.data.color_attributes
+    assert colors.get("uvflat_conformal_color") is not None
+    assert colors["uvflat_conformal_color"].domain == "CORNER"
+
+
+def test_heat_colors_scale(ext):
+    dist = ext.distortion
+    rgba = dist.heat_colors([1.0, dist.RED_AT, 10.0, np.inf, np.nan])
+    np.testing.assert_allclose(rgba[0, :3], dist._RGB[0])
+    np.testing.assert_allclose(rgba[1, :3], dist._RGB[-1])
+    np.testing.assert_allclose(rgba[2, :3], dist._RGB[-1])
+    np.testing.assert_allclose(rgba[3, :3], dist._RGB[-1])
+    np.testing.assert_allclose(rgba[4, :3], 0.5)
+    # flips: a square of two triangles, one of them mirrored in UV
+    uv = np.array([[0, 0], [1, 0], [1, 1], [0, 0], [1, 1], [1, 0]], float)
+    flipped = dist.flipped_faces(uv, [3, 3], [0, 0], [True, True])
+    assert flipped.sum() == 1
+    uv[3:] = [[0, 0], [1, 1], [2, 2]]  # zero UV area counts as flipped
+    assert dist.flipped_faces(uv, [3, 3], [0, 0], [True, True]).tolist() == [False, True]
+
+
+def test_select_flipped_selects_exactly_the_flipped_faces(ext, scene):
+    obj = suzanne()
+    io = ext.mesh_io
+    result, _ = unwrap(ext, [obj], method="tutte", pack="OFF")
+    assert result == {"FINISHED"}
+    assert not io.read_attribute(obj.data, "uvflat_flipped").any(), "Tutte never flips"
+    marked = np.zeros(len(obj.data.polygons), dtype=bool)
+    marked[[3, 17, 200]] = True
+    io.write_attribute(obj.data, "uvflat_flipped", "FACE", "BOOLEAN", marked)
+    common.edit_mode([obj])
+    try:
+        assert bpy.ops.uv.uvflat_select_flipped() == {"FINISHED"}
+        assert obj.mode == "EDIT"
+    finally:
+        common.object_mode()
+    np.testing.assert_array_equal(io.read_face_selection(obj.data), marked)
+
+
+def test_heat_map_toggle_sets_and_restores_the_viewport(ext, scene):
+    obj = suzanne()
+    result, _ = unwrap(ext, [obj], method="lscm")
+    assert result == {"FINISHED"}
+    shading = SimpleNamespace(color_type="OBJECT")
+    space = SimpleNamespace(type="VIEW_3D", shading=shading, as_pointer=lambda: 12345)
+    area = SimpleNamespace(type="VIEW_3D", spaces=[space], tag_redraw=lambda: None)
+    ctx = SimpleNamespace(objects_in_mode=[obj], screen=SimpleNamespace(areas=[area]))
+    ext.ui.show_heat_map(ctx, True, "area")
+    assert shading.color_type == "ATTRIBUTE"
+    assert obj.data.color_attributes.active_color_name == "uvflat_area_color"
+    ext.ui.show_heat_map(ctx, True, "conformal")
+    assert obj.data.color_attributes.active_color_name == "uvflat_conformal_color"
+    ext.ui.show_heat_map(ctx, False, "conformal")
+    assert shading.color_type == "OBJECT", "the viewport's own colour type is put back"
+
+
+def _chart(id, status="solved", flips=0, overlap=False, conformal=1.0, reason=None):
+    return SimpleNamespace(id=id, method="lscm", status=status, faces=10, flips=flips,
+                           overlap=overlap, conformal=conformal, area=1.0, seconds=0.001,
+                           reason=reason, kind="disk")
+
+
+def test_status_line_is_short_and_groups_reasons(ext):
+    engine = ext.engine
+    charts = ([_chart(k, "failed", reason="closed surface: add a seam") for k in range(5)]
+              + [_chart(5, "fallback", reason="did not converge")]
+              + [_chart(6, flips=3), _chart(7, conformal=1.8), _chart(8, overlap=True)])
+    summary = engine.Summary(method="lscm", charts=4, faces=40, seconds=0.5,
+                             results={"Obj": SimpleNamespace(charts=charts)})
+    for c in charts:
+        problem = engine.ChartProblem("Obj", c.id, c.kind, c.status, c.reason or "")
+        (summary.failed if c.status == "failed" else summary.fallback if c.status == "fallback"
+         else []).append(problem)
+    line = summary.line()
+    assert line.count("closed surface") == 1 and "(x5)" in line, line
+    assert "3 flipped" in line and line.endswith("see the uvflat sidebar"), line
+    assert len(line) < 250, line
+    rows = engine.chart_rows(summary)
+    assert [r["chart"] for r in rows[:9]] == [0, 1, 2, 3, 4, 5, 6, 8, 7]
+    clean = engine.Summary(method="lscm", charts=1, faces=10, seconds=0.1,
+                           results={"Obj": SimpleNamespace(charts=[_chart(0)])})
+    assert "sidebar" not in clean.line()
+
+
+class _PanelLayout:
+    """Stand-in for a panel's UILayout: every call returns the layout itself; labels and
+    operators are recorded."""
+
+    def __init__(self):
+        self.labels, self.operators, self.props = [], [], []
+
+    def label(self, text="", **_kwargs):
+        self.labels.append(text)
+        return self
+
+    def operator(self, idname, **_kwargs):
+        self.operators.append(idname)
+        return SimpleNamespace()
+
+    def prop(self, data, name, **_kwargs):
+        self.props.append(name)
+        return self
+
+    def __getattr__(self, _name):
+        return lambda *args, **kwargs: self
+
+
+def test_result_panel_lists_the_last_unwraps_charts(ext, scene):
+    obj = suzanne()
+    result, summary = unwrap(ext, [obj], method="lscm")
+    assert result == {"FINISHED"}
+    layout = _PanelLayout()
+    stand_in = SimpleNamespace(layout=layout)
+    ext.ui.UVFLAT_PT_result.draw(stand_in, bpy.context)
+    assert "show_distortion" in layout.props and "distortion_kind" in layout.props
+    assert "uv.uvflat_select_flipped" in layout.operators
+    assert {"Chart", "Method", "Faces", "Flips", "Overlap", "Conformal", "Area", "Time"} <= set(layout.labels)
+    first = ext.engine.chart_rows(summary)[0]
+    assert f"{obj.name}:{first['chart']}" in layout.labels
+
+
+def test_addon_options_follow_the_core_contract(ext):
+    """Every option the add-on offers is declared by the core for that method, with the same
+    default, choices within the declared ones, and bounds within the declared domain."""
+    import uvflat
+
+    for info in ext.methods.METHODS:
+        declared = {s["name"]: s for s in uvflat.METHOD_OPTIONS[info.id]}
+        for key in info.options:
+            option = ext.methods.OPTIONS[key]
+            spec = declared.get(option.keyword)
+            assert spec is not None, f"{info.id}: the add-on offers {option.keyword}, the core does not"
+            keywords = option.make_property().keywords
+            default = option.to_core(keywords["default"])
+            if spec["type"] == "float":
+                assert default == pytest.approx(spec["default"]), (info.id, key)
+                low = option.to_core(keywords["min"])
+                assert low > spec["min"] or (low == spec["min"] and not spec["min_exclusive"])
+            elif spec["type"] == "int":
+                assert default == spec["default"] and keywords["min"] >= spec["min"], (info.id, key)
+            elif spec["type"] == "choice":
+                assert default == spec["default"], (info.id, key)
+                assert {i[0] for i in keywords["items"]} <= set(spec["choices"]), (info.id, key)
+
+
+# ---------------------------------------------------------------------------------------------
+# Correct aspect
+
+
+def _material_with_image(obj, width, height):
+    image = bpy.data.images.new("Texture", width, height)
+    material = bpy.data.materials.new("Textured")
+    if material.node_tree is None:  # older Blenders: nodes are off by default
+        material.use_nodes = True
+    node = material.node_tree.nodes.new("ShaderNodeTexImage")
+    node.image = image
+    obj.data.materials.append(material)
+    return image
+
+
+def test_image_aspect_sources(ext, scene):
+    obj = suzanne()
+    aspect = ext.aspect
+    assert aspect.image_aspect(SimpleNamespace(space_data=None), obj) == 1.0
+    _material_with_image(obj, 200, 100)
+    assert aspect.image_aspect(SimpleNamespace(space_data=None), obj) == 2.0
+    # the UV editor's image wins over the material's
+    editor = SimpleNamespace(type="IMAGE_EDITOR", image=SimpleNamespace(size=(100, 300)))
+    assert aspect.image_aspect(SimpleNamespace(space_data=editor), obj) == pytest.approx(1 / 3)
+    empty_editor = SimpleNamespace(type="IMAGE_EDITOR", image=None)
+    assert aspect.image_aspect(SimpleNamespace(space_data=empty_editor), obj) == 2.0
+
+
+def test_correct_aspect_halves_u_for_a_wide_texture(ext, scene):
+    obj = suzanne()
+    io = ext.mesh_io
+    before = read(ext, obj)
+    result, summary = unwrap(ext, [obj], method="lscm", pack="OFF", correct_aspect=False)
+    assert result == {"FINISHED"}
+    plain = read(ext, obj).uv
+    _material_with_image(obj, 256, 128)
+    io.write_uv(obj.data, io.active_uv_name(obj.data), before.uv)
+    result, summary = unwrap(ext, [obj], method="lscm", pack="OFF", correct_aspect=True)
+    assert result == {"FINISHED"}
+    wide = read(ext, obj).uv
+    chart = np.repeat(np.asarray(summary.results[obj.name].chart), before.face_sizes)
+    for k in np.unique(chart[chart >= 0]):
+        a, b = plain[chart == k], wide[chart == k]
+        np.testing.assert_allclose(np.ptp(b[:, 0]), np.ptp(a[:, 0]) / 2, rtol=1e-4)
+        np.testing.assert_allclose(np.ptp(b[:, 1]), np.ptp(a[:, 1]), rtol=1e-4)
+        # scaled about the island's centre
+        np.testing.assert_allclose(b.min(0) + b.max(0), a.min(0) + a.max(0), atol=1e-5)
+    # the distortion attributes measure texture pixels: the same with and without correction
+    assert ext.mesh_io.read_attribute(obj.data, "uvflat_conformal") is not None

@@ -92,7 +92,7 @@ def test_failure_after_marking_restores_seams_and_uvs(ext, scene, monkeypatch):
 
     monkeypatch.setattr(ext.engine, "_pack", failing_pack)
     with pytest.raises(RuntimeError, match="injected"):
-        unwrap(ext, [obj], method="lscm", pack=True)
+        unwrap(ext, [obj], method="lscm", pack="ALL")
     after = read(ext, obj)
     assert len(after.seams) == 0, "seams marked by a failed unwrap were not removed"
     assert np.array_equal(after.uv, before.uv)

@@ -102,6 +102,7 @@ def test_methods_and_exports():
         ("PinError", ("UvflatError", "ValueError")),
         ("OptionError", ("UvflatError", "ValueError")),
         ("AngleSumError", ("OptionError", "UvflatError", "ValueError")),
+        ("Cancelled", ("UvflatError",)),
         ("UvflatError", ("Exception",)),
     ],
 )
@@ -162,7 +163,8 @@ def test_output_shapes_and_dtypes():
     assert (rep.boundary_loops, rep.genus) == (1, 0)
 
     d = rep.as_dict()
-    assert set(d) == set(int_fields + float_fields + ["method", "kind", "status", "reason", "overlap"])
+    assert set(d) == set(int_fields + float_fields + ["method", "kind", "status", "reason", "overlap",
+                                                     "reason_code"])
     assert d["faces"] == 12 and d["status"] == "solved"
     assert "ChartReport(" in repr(rep) and "solved" in repr(rep)
 
@@ -951,3 +953,249 @@ def test_abf_convex_boundary_on_suzanne_with_her_seams():
             else:
                 convex_somewhere |= not convex
     assert convex_somewhere, "the free boundary should leave some outline non-convex"
+
+
+# ---------------------------------------------------------------------------------------------
+# Option errors, documentation, degenerate charts, non-manifold edges, per-face distortion
+
+
+def test_unknown_option_names_the_keyword():
+    pos, cv, fs = grid(2, 2)
+    with pytest.raises(uvflat.OptionError) as ei:
+        uvflat.unwrap(pos, cv, fs, method="tutte", frobnicate=True)
+    assert ei.value.option == "frobnicate"
+    assert "frobnicate" in str(ei.value) and "options" not in str(ei.value)
+    with pytest.raises(uvflat.OptionError) as ei:
+        uvflat.unwrap(pos, cv, fs, method="lscm", max_iterations=3)
+    assert ei.value.option == "max_iterations"
+
+
+def test_help_shows_signature_and_documentation():
+    import inspect
+    import pydoc
+
+    sig = inspect.signature(uvflat.unwrap)
+    assert list(sig.parameters)[:3] == ["positions", "corner_verts", "face_sizes"]
+    assert sig.parameters["method"].default == "lscm"
+    assert sig.parameters["method"].kind is inspect.Parameter.KEYWORD_ONLY
+    text = pydoc.render_doc(uvflat.unwrap, renderer=pydoc.plaintext)
+    assert "See the package documentation" not in text
+    for word in ("positions", "fit_to", "OptionError", *uvflat.METHODS):
+        assert word in text, f"help(uvflat.unwrap) does not mention {word}"
+
+
+def _stub_unwrap_options():
+    """Methods and option names listed by the .pyi stub (parsed, not imported)."""
+    import ast
+    from pathlib import Path
+
+    stub = Path(uvflat.__file__).with_name("__init__.pyi")
+    tree = ast.parse(stub.read_text())
+    methods, options = None, None
+    for node in tree.body:
+        if isinstance(node, ast.Assign) and getattr(node.targets[0], "id", "") == "Method":
+            methods = [e.value for e in node.value.slice.elts]
+        if isinstance(node, ast.ClassDef) and node.name == "UnwrapOptions":
+            options = [n.target.id for n in node.body if isinstance(n, ast.AnnAssign)]
+    return methods, options
+
+
+# One valid value of every option keyword, for the methods that take it.
+_OPTION_SAMPLES = {
+    "boundary": {"tutte": "square", "harmonic": "circle", "mean_value": "virtual",
+                 "abf": "convex"},
+    "max_iterations": dict.fromkeys(("spectral", "abf", "arap", "slim", "mips", "scaffold"), 3),
+    "tolerance": dict.fromkeys(("spectral", "abf", "arap", "slim", "mips", "scaffold"), 1e-3),
+    "solver": {"abf": "abf"},
+    "angle_sums": {"abf": ([0], [math.pi / 2])},
+    "start": {"slim": "mean_value"},
+}
+
+
+def test_stub_lists_every_method_and_option():
+    methods, options = _stub_unwrap_options()
+    assert methods is not None and options is not None, "the stub lost Method / UnwrapOptions"
+    assert set(methods) == set(uvflat.METHODS)
+    assert set(options) == set(_OPTION_SAMPLES)
+    pos, cv, fs = grid(2, 2, triangles=True)
+    for name, per_method in _OPTION_SAMPLES.items():
+        for method in uvflat.METHODS:
+            kwargs = {name: per_method[method]} if method in per_method else {name: 1}
+            if method in per_method:
+                uvflat.unwrap(pos, cv, fs, method=method, **kwargs)  # accepted
+            else:
+                with pytest.raises(uvflat.OptionError) as ei:
+                    uvflat.unwrap(pos, cv, fs, method=method, **kwargs)
+                assert ei.value.option == name
+
+
+@pytest.mark.parametrize("method", ["tutte", "lscm", "abf", "slim"])
+def test_zero_area_triangle_is_a_flip_never_nan(method):
+    # Three collinear vertices: the triangle has no 3D area; its area-normalised UV
+    # triangle has none either, so the report, metrics and docs count it as a flip.
+    pos = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0]], dtype=float)
+    r = uvflat.unwrap(pos, [0, 1, 2], [3], method=method)
+    c = r.charts[0]
+    if c.status == "failed":
+        assert c.reason
+        return
+    assert c.flips == 1
+    assert not math.isnan(c.conformal) and not math.isnan(c.area)
+    m = uvflat.metrics(pos, [0, 1, 2], [3], r.uv)
+    assert m.flips == 1 and not math.isnan(m.conformal)
+
+
+def test_zero_area_triangle_has_no_weight_in_a_chart():
+    # A flat grid plus one collinear sliver sharing an edge: the grid's distortion is 1, and
+    # the sliver (weight 0) neither adds NaN nor changes it.
+    pos, cv, fs = grid(3, 3, triangles=True)
+    pos = np.vstack([pos, [[1.5, 0.0, 0.0]]])
+    cv = np.concatenate([cv, [1, len(pos) - 1, 2]])
+    fs = np.concatenate([fs, [3]])
+    uv = pos[cv, :2].copy()
+    m = uvflat.metrics(pos, cv, fs, uv)
+    assert m.flips == 1  # the sliver's UV triangle has zero area
+    assert m.conformal == pytest.approx(1.0) and m.area == pytest.approx(1.0)
+
+
+def test_non_manifold_edges_are_counted():
+    # Three triangles on edge 0-1 (a fin) and one more on edge 2-3 of a separate pair.
+    pos = np.array([[0, 0, 0], [1, 0, 0], [0.5, 1, 0], [0.5, -1, 0], [0.5, 0, 1]], float)
+    cv = [0, 1, 2, 1, 0, 3, 0, 1, 4]
+    r = uvflat.unwrap(pos, cv, [3, 3, 3], method="lscm")
+    assert r.non_manifold_edges == 1
+    assert len(r.charts) == 3
+    assert r.as_dict()["non_manifold_edges"] == 1
+    pos, cv, fs = grid(3, 3)
+    assert uvflat.unwrap(pos, cv, fs).non_manifold_edges == 0
+
+
+def test_metrics_per_face_distortion():
+    # Stretch a planar grid by 2 along x in UV: every face has sigma1/sigma2 = 2 and, after
+    # area normalisation, sigma1*sigma2 = 1.
+    pos, cv, fs = grid(3, 2)
+    uv = pos[cv, :2] * [2.0, 1.0]
+    m = uvflat.metrics(pos, cv, fs, uv)
+    assert m.face_conformal.shape == (len(fs),) and m.face_area.shape == (len(fs),)
+    np.testing.assert_allclose(m.face_conformal, 2.0)
+    np.testing.assert_allclose(m.face_area, 1.0)
+    # Unselected faces are not measured: NaN.
+    sel = np.ones(len(fs), dtype=bool)
+    sel[-1] = False
+    m = uvflat.metrics(pos, cv, fs, pos[cv, :2], selected=sel)
+    assert np.isnan(m.face_conformal[-1]) and np.isnan(m.face_area[-1])
+    np.testing.assert_allclose(m.face_conformal[:-1], 1.0)
+    # The area-weighted mean of the per-face values is the whole-map value.
+    rng = np.random.default_rng(1)
+    uv = (pos[:, :2] + rng.normal(scale=0.05, size=(len(pos), 2)))[cv]
+    m = uvflat.metrics(pos, cv, fs, uv)
+    assert m.charts == 1 and np.ptp(m.face_conformal) > 1e-3
+    # (equal face areas: the mean of the faces is the area-weighted mean)
+    np.testing.assert_allclose(np.mean(m.face_conformal), m.conformal, rtol=1e-9)
+    np.testing.assert_allclose(np.mean(m.face_area), m.area, rtol=1e-9)
+
+
+# ---------------------------------------------------------------------------------------------
+# Progress and cancel
+
+
+def _disks(n):
+    """``n`` separate flat grids: ``n`` charts."""
+    pos, cv, fs = grid(4, 4)
+    return (np.vstack([pos + [10.0 * k, 0, 0] for k in range(n)]),
+            np.concatenate([cv + k * len(pos) for k in range(n)]), np.tile(fs, n))
+
+
+def test_progress_reports_to_the_last_chart_and_changes_nothing():
+    pos, cv, fs = _disks(6)
+    calls = []
+    r = uvflat.unwrap(pos, cv, fs, progress=lambda done, total: calls.append((done, total)))
+    plain = uvflat.unwrap(pos, cv, fs)
+    np.testing.assert_array_equal(r.uv, plain.uv)
+    assert calls and calls[-1] == (6, 6) or (6, 6) in calls, calls
+    assert all(total == 6 and 1 <= done <= 6 for done, total in calls)
+
+
+def test_progress_returning_false_cancels():
+    pos, cv, fs = _disks(5)
+    with pytest.raises(uvflat.Cancelled) as ei:
+        uvflat.unwrap(pos, cv, fs, progress=lambda done, total: False)
+    assert isinstance(ei.value, uvflat.UvflatError)
+    assert ei.value.charts_total == 5 and 1 <= ei.value.charts_done <= 5
+
+
+def test_progress_exception_is_re_raised():
+    pos, cv, fs = _disks(3)
+
+    def boom(done, total):
+        raise KeyError("from the callback")
+
+    with pytest.raises(KeyError, match="from the callback"):
+        uvflat.unwrap(pos, cv, fs, progress=boom)
+    with pytest.raises(uvflat.InputError) as ei:
+        uvflat.unwrap(pos, cv, fs, progress=42)
+    assert ei.value.argument == "progress"
+
+
+def test_cancel_from_another_thread_stops_an_iterative_method():
+    # A curved disk under ARAP with no tolerance and a huge budget: only the cancel stops it.
+    pos, cv, fs = grid(40, 40, triangles=True, size=0.05)
+    pos[:, 2] = np.sin(3 * pos[:, 0]) * np.cos(3 * pos[:, 1])
+    stop = threading.Event()
+    threading.Timer(0.5, stop.set).start()
+    import time
+
+    t0 = time.perf_counter()
+    with pytest.raises(uvflat.Cancelled):
+        uvflat.unwrap(pos, cv, fs, method="arap", max_iterations=10**9, tolerance=0.0,
+                      progress=lambda done, total: not stop.is_set())
+    assert time.perf_counter() - t0 < 30
+
+
+# ---------------------------------------------------------------------------------------------
+# One contract for options: METHOD_OPTIONS
+
+
+def test_method_options_are_declared_for_every_method_and_accepted():
+    assert set(uvflat.METHOD_OPTIONS) == set(uvflat.METHODS)
+    pos, cv, fs = grid(2, 2, triangles=True)
+    for method, specs in uvflat.METHOD_OPTIONS.items():
+        for spec in specs:
+            assert set(spec) == {"name", "type", "default", "min", "max", "min_exclusive",
+                                 "choices", "doc"} and spec["doc"]
+            if spec["type"] == "vertex_values":
+                continue
+            # the declared default is accepted, and a value outside the domain is refused
+            uvflat.unwrap(pos, cv, fs, method=method, **{spec["name"]: spec["default"]})
+            bad = {"int": (spec["min"] or 0) - 1, "float": -1.0, "choice": "no such choice"}
+            with pytest.raises(uvflat.OptionError) as ei:
+                uvflat.unwrap(pos, cv, fs, method=method, **{spec["name"]: bad[spec["type"]]})
+            assert ei.value.option == spec["name"]
+
+
+def test_stub_and_docstring_follow_method_options():
+    methods, options = _stub_unwrap_options()
+    declared = {s["name"] for specs in uvflat.METHOD_OPTIONS.values() for s in specs}
+    assert set(options) == declared
+    doc = uvflat.unwrap.__doc__
+    for method, specs in uvflat.METHOD_OPTIONS.items():
+        assert method in doc
+        for s in specs:
+            assert s["name"] in doc, f"help(uvflat.unwrap) does not document {method}'s {s['name']}"
+            if s["type"] in ("int", "float"):
+                d = s["default"]
+                spelled = {str(d), f"{d:g}", f"{d:.0e}".replace("e-0", "e-")}
+                assert any(f"default {x}" in doc for x in spelled), \
+                    f"{method}.{s['name']} default {d} not documented"
+            if s["type"] == "choice":
+                assert f'"{s["default"]}" (default)' in doc, f"{method}.{s['name']}"
+
+
+def test_reason_codes_are_stable():
+    pos, cv, fs = grid(3, 3)
+    r = uvflat.unwrap(pos, cv, fs)
+    assert [c.reason_code for c in r.charts] == ["solved"]
+    assert r.charts[0].as_dict()["reason_code"] == "solved"
+    pos, cv, fs = cube()
+    c = uvflat.unwrap(pos, cv, fs, auto_seams=False).charts[0]
+    assert c.status == "failed" and c.reason_code == "failed_closed" and c.reason

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -112,3 +113,179 @@ def test_batch_refuses_bad_auto_seam_arguments_before_writing(tmp_path, flag):
     assert r.returncode == 1, r.stdout + r.stderr
     assert flag[0] in (r.stdout + r.stderr)
     assert not out.exists()
+# ---------------------------------------------------------------------------------------------
+# Every bad argument: one clear line naming it, exit status 1, nothing written
+
+
+def _bad_args_cases(tmp_path):
+    src = tmp_path / "grid.obj"
+    _grid_obj(src)
+    locked = tmp_path / "locked"
+    locked.mkdir()
+    locked.chmod(0o500)
+    (tmp_path / "mesh.stl").write_text("solid x\nendsolid x\n")
+    out = tmp_path / "out" / "out.obj"
+    return [
+        ([src, out, "--margin", "-5"], "--margin"),
+        ([src, out, "--margin", "2"], "--margin"),
+        ([src, out, "--method", "spectral", "--max-iterations", "0"], "--max-iterations"),
+        ([src, out, "--method", "slim", "--tolerance-exponent", "5"], "--tolerance-exponent"),
+        ([src, out, "--method", "lscm", "--max-iterations", "5"], "--max-iterations"),
+        ([src, out, "--method", "abf", "--boundary", "circle"], "--boundary"),
+        ([src, out, "--method", "frob"], "--method"),
+        ([src, out, "--size", "0"], "--size"),
+        ([src, out, "--max-iterations", "many"], "--max-iterations"),
+        ([src, out, "--pack", "around", "--no-pack"], "--no-pack"),
+        ([tmp_path / "missing.obj", out], "missing.obj"),
+        ([tmp_path / "mesh.stl", out], ".stl"),
+        ([src, tmp_path / "out" / "out.fbx"], ".fbx"),
+        ([src, locked / "sub" / "out.obj"], "not writable"),
+        ([src, src / "sub" / "out.obj"], "not a folder"),
+        ([src, out, "--png", tmp_path / "layout.jpg"], "--png"),
+    ]
+
+
+def test_bad_arguments_one_line_exit_1_nothing_written(tmp_path):
+    for args, named in _bad_args_cases(tmp_path):
+        if "not writable" == named and os.geteuid() == 0:
+            continue  # root writes anywhere
+        r = _run(*args)
+        text = (r.stdout + r.stderr).strip()
+        assert r.returncode == 1, f"{args}: exit {r.returncode}\n{text}"
+        assert "Traceback" not in text, f"{args}:\n{text}"
+        errors = [line for line in text.splitlines() if "error" in line.lower()]
+        assert len(errors) == 1 and named in errors[0], f"{args}: {text}"
+        assert not (tmp_path / "out").exists(), f"{args}: something was written"
+
+
+def test_uv_name_is_the_active_and_render_map_of_the_glb(tmp_path):
+    import bpy
+
+    sys.path.insert(0, str(REPO / "blender_scripts"))
+    import common
+
+    # An input with an existing UV map ("Old", planar projection) that the glb must not carry
+    # as TEXCOORD_0 once --uv-name wrote "Fresh".
+    src = tmp_path / "grid.obj"
+    _grid_obj(src)
+    lines = src.read_text().splitlines()
+    verts = [line for line in lines if line.startswith("v ")]
+    uv_lines = [f"vt {0.01 * k:.4f} 0.0" for k in range(len(verts))]
+    faces = [" ".join(["f"] + [f"{i}/{i}" for i in line.split()[1:]])
+             for line in lines if line.startswith("f ")]
+    src.write_text("\n".join(verts + uv_lines + faces) + "\n")
+    out = tmp_path / "out.glb"
+    r = _run(src, out, "--uv-name", "Fresh", "--pack", "all")
+    assert r.returncode == 0, r.stdout + r.stderr
+    blend = tmp_path / "out.blend"
+    r = _run(src, blend, "--uv-name", "Fresh", "--pack", "all")
+    assert r.returncode == 0, r.stdout + r.stderr
+
+    common.reset_scene()
+    import addon_utils
+
+    addon_utils.enable("io_scene_gltf2", default_set=False)
+    bpy.ops.import_scene.gltf(filepath=str(out))
+    obj = next(o for o in bpy.context.scene.objects if o.type == "MESH")
+    layers = obj.data.uv_layers
+    first = np.empty(2 * len(obj.data.loops), dtype=np.float32)
+    layers[0].uv.foreach_get("vector", first)  # TEXCOORD_0
+    first = first.reshape(-1, 2)
+    # The old map is a line (v = 0 after the glTF flip: v = 1); uvflat's is a 2D disk.
+    assert np.ptp(first, axis=0).min() > 0.1, "TEXCOORD_0 is still the old UV map"
+
+    with bpy.data.libraries.load(str(blend)) as (src_data, dst_data):
+        dst_data.meshes = list(src_data.meshes)
+    mesh = dst_data.meshes[0]
+    assert mesh.uv_layers.active.name == "Fresh"
+    assert next(layer for layer in mesh.uv_layers if layer.active_render).name == "Fresh"
+
+
+# ---------------------------------------------------------------------------------------------
+# Batch over a folder
+
+
+def _two_object_obj(path: Path) -> None:
+    """Two separate quad grids as two OBJ objects."""
+    lines = []
+    for k, name in enumerate(("Left", "Right")):
+        lines.append(f"o {name}")
+        base = k * 16
+        for j in range(4):
+            for i in range(4):
+                lines.append(f"v {i + 10 * k} {j} {0.2 * np.sin(i + j):.5f}")
+        for j in range(3):
+            for i in range(3):
+                a = base + j * 4 + i + 1
+                lines.append(f"f {a} {a + 1} {a + 5} {a + 4}")
+    path.write_text("\n".join(lines) + "\n")
+
+
+def _off(path: Path) -> None:
+    path.write_text("OFF\n4 2 0\n0 0 0\n1 0 0\n1 1 0.2\n0 1 0\n3 0 1 2\n3 0 2 3\n")
+
+
+def test_batch_over_a_folder_of_mixed_files(tmp_path):
+    src = tmp_path / "in"
+    src.mkdir()
+    _grid_obj(src / "grid.obj")
+    _two_object_obj(src / "pair.obj")
+    _off(src / "square.off")
+    (src / "broken.ply").write_text("ply\nformat ascii 1.0\nelement vertex 3\nend_header\n1 2\n")
+    (src / "notes.txt").write_text("not a mesh")
+    out, report = tmp_path / "out", tmp_path / "report.json"
+    r = _run(src, out, "--jobs", "2", "--format", "glb", "--report", report, "--method", "lscm")
+    text = r.stdout + r.stderr
+    assert r.returncode == 1, text  # broken.ply failed
+    for name in ("grid.obj", "pair.obj", "square.off", "broken.ply"):
+        assert sum(line.split("] ")[-1].startswith(f"{name}:") for line in r.stdout.splitlines()) == 1, text
+    assert "notes.txt" not in text
+    table = r.stdout[r.stdout.index("file "):]
+    assert "4 files, 3 ok, 1 not" in table, table
+    for stem in ("grid", "pair", "square"):
+        assert (out / f"{stem}.glb").stat().st_size > 0
+        assert (out / f"{stem}_uv.png").is_file()
+    import json
+
+    data = json.loads(report.read_text())
+    by_file = {Path(d["file"]).name: d for d in data["files"]}
+    assert set(by_file) == {"grid.obj", "pair.obj", "square.off"}
+    assert len(by_file["pair.obj"]["objects"]) == 2, "every mesh object of a file is unwrapped"
+    for d in by_file.values():
+        for charts in d["objects"].values():
+            assert charts and all(c["status"] == "solved" for c in charts)
+    broken = next(row for row in data["table"] if row["file"] == "broken.ply")
+    assert broken["status"] == "error"
+
+
+def test_batch_refuses_bad_arguments_before_running(tmp_path):
+    src = tmp_path / "in"
+    src.mkdir()
+    _grid_obj(src / "grid.obj")
+    for args, named in (([src, tmp_path / "out", "--jobs", "0"], "--jobs"),
+                        ([tmp_path / "empty*.obj", tmp_path / "out"], "empty*.obj"),
+                        ([src, src / "grid.obj", "--method", "lscm"], "output folder")):
+        r = _run(*args)
+        assert r.returncode == 1 and named in r.stderr, (args, r.stdout + r.stderr)
+        assert not (tmp_path / "out").exists()
+
+
+def test_batch_options_follow_the_core_contract():
+    """The script's method options exist in uvflat.METHOD_OPTIONS with the same choices."""
+    import importlib.util
+
+    import uvflat
+
+    spec = importlib.util.spec_from_file_location("uvflat_unwrap_script", SCRIPT)
+    script = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(script)
+    args = script.parse_args(["in.obj", "out.obj"])
+    declared = {}
+    for specs in uvflat.METHOD_OPTIONS.values():
+        for s in specs:
+            declared.setdefault(s["name"], set()).update(s["choices"] or ())
+    by_dest = {a.dest: a for a in args.parser._actions}
+    for dest in ("boundary", "solver"):
+        assert set(by_dest[dest].choices) == declared[dest], dest
+    for dest in ("max_iterations", "tolerance_exponent"):
+        assert by_dest[dest].default is None, f"--{dest}: the method's own default applies"

@@ -38,10 +38,13 @@ pub enum UvError {
     NonFiniteUv { corner: usize },
     /// An option has a value outside its domain.
     #[error("option {name}: {reason}")]
-    Option { name: &'static str, reason: String },
+    Option { name: String, reason: String },
     /// A prescribed angle sum (ABF option `angle_sums`) names a bad vertex or has a bad value.
     #[error("option angle_sums, entry {entry} (vertex {vertex}, sum {value}): {reason}")]
     AngleSum { entry: usize, vertex: u64, value: f64, reason: String },
+    /// The unwrap was cancelled through its [`Progress`](crate::Progress); no UVs.
+    #[error("cancelled after {charts_done} of {charts_total} charts")]
+    Cancelled { charts_done: usize, charts_total: usize },
 }
 
 /// Result alias used throughout the crate.

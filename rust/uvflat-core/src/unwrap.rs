@@ -1,11 +1,12 @@
 //! The one-call pipeline: validate, split into charts, map each chart in parallel, measure.
 
-use crate::charts::{build_charts, Chart};
+use crate::charts::{build_charts, build_charts_counting, Chart};
 use crate::cuts::{self, AutoSeamOptions};
-use crate::error::Result;
+use crate::error::{Result, UvError};
 use crate::mesh::PolyMesh;
 use crate::methods::{self, ChartFailure, Method};
 use crate::metrics::{self, Distortion};
+use crate::progress::Progress;
 
 /// Polygon soup with everything an unwrap reads from the user's mesh.
 ///
@@ -50,6 +51,9 @@ pub struct UnwrapOptions {
     pub fit: Fit,
     /// Automatic seams for closed and higher-genus charts (see [`crate::cuts`]). Default: on.
     pub auto_seams: AutoSeamOptions,
+    /// Progress callback and cancel flag, polled between charts and between iterations of
+    /// the iterative methods. Default: none.
+    pub progress: Option<Progress>,
 }
 
 /// Topological class of a chart, from its Euler characteristic and boundary loops.
@@ -140,6 +144,31 @@ pub struct ChartReport {
     pub cut_length: f64,
 }
 
+impl ChartReport {
+    /// Stable code of the chart's outcome, for programs (the prose `reason` is for people):
+    /// `"solved"`, `"solved_with_note"` (e.g. how pins were honoured), `"fallback"`,
+    /// `"failed_closed"` (a closed surface: no boundary to open it along), `"failed_genus"`
+    /// (handles: seams must cut them), `"failed_defect"` (non-orientable or a non-manifold
+    /// vertex inside the chart), `"failed_solver"` (the method could not map a disk-like
+    /// chart).
+    pub fn reason_code(&self) -> &'static str {
+        match (self.status, self.kind) {
+            (ChartStatus::Solved, _) if self.reason.is_none() => "solved",
+            (ChartStatus::Solved, _) => "solved_with_note",
+            (ChartStatus::Fallback, _) => "fallback",
+            (ChartStatus::Failed, ChartKind::Closed) => "failed_closed",
+            (ChartStatus::Failed, ChartKind::HigherGenus) => "failed_genus",
+            (ChartStatus::Failed, _) if self.reason.as_deref().is_some_and(is_defect) => "failed_defect",
+            (ChartStatus::Failed, _) => "failed_solver",
+        }
+    }
+}
+
+/// Whether a failure reason is a chart defect found while building charts.
+fn is_defect(reason: &str) -> bool {
+    reason.contains("non-orientable") || reason.contains("non-manifold")
+}
+
 /// Result of [`unwrap`].
 #[derive(Debug, Clone)]
 pub struct Unwrapped {
@@ -152,6 +181,9 @@ pub struct Unwrapped {
     pub charts: Vec<ChartReport>,
     /// Seams added by automatic seams, as mesh vertex pairs `[a, b]` with `a < b`, sorted.
     pub new_seams: Vec<[u32; 2]>,
+    /// Edges of the selection used by three or more selected faces; each was treated as a
+    /// seam (a mesh with many of them is shredded into many small charts).
+    pub non_manifold_edges: usize,
 }
 
 impl Unwrapped {
@@ -177,7 +209,7 @@ pub fn unwrap(input: &MeshInput<'_>, options: &UnwrapOptions) -> Result<Unwrappe
     // practice are faster sequential than split across threads.
     faer::set_global_parallelism(faer::Par::Seq);
 
-    let charts = build_charts(&mesh, input.seams, input.selected);
+    let (charts, non_manifold_edges) = build_charts_counting(&mesh, input.seams, input.selected);
     let mut pin_of_corner: Vec<Option<[f64; 2]>> = vec![None; n_corners];
     for &(c, uv) in input.pins {
         pin_of_corner[c as usize] = Some(uv);
@@ -188,15 +220,36 @@ pub fn unwrap(input: &MeshInput<'_>, options: &UnwrapOptions) -> Result<Unwrappe
         avoid[v as usize] = true;
     }
     let ctx = Context { mesh: &mesh, pins: &pin_of_corner, options, avoid: &avoid };
-    // Largest charts first, one per task; results in chart order (see `schedule`).
-    let pieces: Vec<Vec<Piece>> = crate::schedule::solve_charts_scheduled(&charts, |_, chart| {
+    // With a Progress: charts after a cancel are skipped (None), and the unwrap is an error.
+    let total = charts.len();
+    if let Some(p) = &options.progress {
+        p.start(total);
+    }
+    let run = |chart: &Chart| -> Vec<Piece> {
         if options.auto_seams.enabled && cuts::needs_cut(chart) {
             auto_cut(&ctx, chart, input.seams, 0)
         } else {
             let (report, uv) = solve_chart(0, chart, &pin_of_corner, options);
             vec![Piece { chart: None, report, uv, seams: Vec::new() }]
         }
+    };
+    // Largest charts first, one per task; results in chart order (see `schedule`).
+    let pieces: Vec<Option<Vec<Piece>>> = crate::schedule::solve_charts_scheduled(&charts, |_, chart| match &options.progress {
+        None => Some(run(chart)),
+        Some(p) if p.is_cancelled() => None,
+        Some(p) => {
+            let out = {
+                let _guard = p.enter();
+                run(chart)
+            };
+            p.chart_done();
+            Some(out)
+        }
     });
+    if let Some(p) = options.progress.as_ref().filter(|p| p.is_cancelled()) {
+        return Err(UvError::Cancelled { charts_done: p.charts_done(), charts_total: total });
+    }
+    let pieces = pieces.into_iter().map(|p| p.unwrap_or_default());
 
     let mut uv = vec![[0.0, 0.0]; n_corners];
     let mut face_chart = vec![-1i32; mesh.n_faces()];
@@ -221,7 +274,7 @@ pub fn unwrap(input: &MeshInput<'_>, options: &UnwrapOptions) -> Result<Unwrappe
     }
     new_seams.sort_unstable();
     new_seams.dedup();
-    Ok(Unwrapped { uv, face_chart, charts: reports, new_seams })
+    Ok(Unwrapped { uv, face_chart, charts: reports, new_seams, non_manifold_edges })
 }
 
 fn solve_chart(
@@ -281,6 +334,15 @@ fn solve_chart(
         }
     }
     let m = metrics::chart_metrics(&chart.positions, &chart.triangles, &solution.uv, &chart.boundary_loops);
+    if !(m.area_3d > 0.0) {
+        // Every face is degenerate (collinear or coincident corners): no UV map can match a
+        // surface without area, so the chart keeps its UVs and says why.
+        report.status = ChartStatus::Failed;
+        report.method = options.method.name();
+        report.reason = Some("the chart has no 3D area (every face is degenerate): its UVs are left as they were".into());
+        report.seconds = start.elapsed().as_secs_f64();
+        return (report, None);
+    }
     report.flips = m.flips;
     report.overlap = m.overlap;
     report.distortion = m.distortion;

@@ -402,7 +402,7 @@ fn angle_sums_option_through_parse_and_unwrap() {
     assert!(matches!(Method::parse("lscm", &opt(vec![(0, PI)])), Err(UvError::Option { .. })));
     assert!(matches!(
         Method::parse("abf", &[("angle_sums".to_string(), OptionValue::Float(1.0))]),
-        Err(UvError::Option { name: "angle_sums", .. })
+        Err(UvError::Option { ref name, .. }) if name == "angle_sums"
     ));
     for (bad, entry, vertex) in [
         (vec![(3, PI), (5, f64::NAN)], 1, 5),

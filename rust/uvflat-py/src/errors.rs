@@ -26,6 +26,7 @@ pub enum Kind {
     Pin,
     Option,
     AngleSum,
+    Cancelled,
 }
 
 /// (kind, class name, parent kind (None: Exception), also a ValueError, attribute names, doc)
@@ -122,6 +123,15 @@ const SPECS: &[Spec] = &[
          below 2*pi times the vertex's number of face corners.\n\n\
          Attributes: option ('angle_sums'), reason, entry (position in the arrays), vertex, \
          value (the sum, None when the index itself could not be read).",
+    ),
+    (
+        Kind::Cancelled,
+        "Cancelled",
+        Some(Kind::Uvflat),
+        false,
+        &["charts_done", "charts_total"],
+        "The unwrap was cancelled by its progress callback (it returned False); no UVs.\n\n\
+         Attributes: charts_done, charts_total.",
     ),
 ];
 
@@ -254,6 +264,12 @@ pub fn map_uv_error(py: Python<'_>, err: UvError, uv_argument: &str) -> PyErr {
             Kind::Input,
             format!("{uv_argument}: {msg}"),
             attrs![py; "argument" => uv_argument, "corner" => corner],
+        ),
+        UvError::Cancelled { charts_done, charts_total } => error(
+            py,
+            Kind::Cancelled,
+            msg,
+            attrs![py; "charts_done" => charts_done, "charts_total" => charts_total],
         ),
         UvError::Option { name, reason } => {
             error(py, Kind::Option, msg, attrs![py; "option" => name, "reason" => reason])

@@ -6,16 +6,18 @@
 
 mod convert;
 mod errors;
+mod options;
 mod results;
 
 use std::panic::{catch_unwind, AssertUnwindSafe};
-use std::time::Instant;
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
 
 use numpy::{PyArray1, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyString, PyTuple};
 use uvflat_core::methods::{method_names, Method, OptionValue};
-use uvflat_core::{AutoSeamOptions, Fit, MeshInput, UnwrapOptions, UvError};
+use uvflat_core::{AutoSeamOptions, Fit, MeshInput, Progress, UnwrapOptions, UvError};
 
 use convert::{floats, indices, Layout};
 use errors::{attrs, error, internal_error, map_uv_error, Kind};
@@ -285,7 +287,8 @@ fn factorization_seconds(
 #[pyfunction]
 #[pyo3(signature = (positions, corner_verts, face_sizes, *, method = "lscm", seams = None, selected = None,
                     pins = None, pin_uvs = None, fit_to = None, auto_seams = None, max_stretch = None,
-                    max_cones = None, avoid_vertices = None, sharp_angle = None, **options))]
+                    max_cones = None, avoid_vertices = None, sharp_angle = None, progress = None,
+                    **options))]
 #[allow(clippy::too_many_arguments)]
 fn unwrap(
     py: Python<'_>,
@@ -303,6 +306,7 @@ fn unwrap(
     max_cones: Option<&Bound<'_, PyAny>>,
     avoid_vertices: Option<&Bound<'_, PyAny>>,
     sharp_angle: Option<&Bound<'_, PyAny>>,
+    progress: Option<&Bound<'_, PyAny>>,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PyUnwrapResult> {
     let opts = read_options(py, options)?;
@@ -348,12 +352,25 @@ fn unwrap(
 
     let auto_seams = read_auto_seams(py, auto_seams, max_stretch, max_cones, avoid_vertices, sharp_angle, n_vertices)?;
     let method_name = method.name().to_string();
-    let unwrap_options = UnwrapOptions { method, fit, auto_seams };
-    let (result, seconds) = run_core(py, "fit_to", || {
+    let raised: Arc<Mutex<Option<PyErr>>> = Arc::new(Mutex::new(None));
+    let progress = match progress.filter(|p| !p.is_none()) {
+        None => None,
+        Some(p) if !p.is_callable() => {
+            return Err(errors::input_error(py, "progress", "progress: must be callable (charts_done, charts_total) -> bool | None"))
+        }
+        Some(p) => Some(python_progress(p.clone().unbind(), raised.clone())),
+    };
+    let unwrap_options = UnwrapOptions { method, fit, auto_seams, progress };
+    let outcome = run_core(py, "fit_to", || {
         let start = Instant::now();
         let r = uvflat_core::unwrap(&soup.input(&seams, selected.as_deref(), &pins), &unwrap_options)?;
         Ok((r, start.elapsed().as_secs_f64()))
-    })?;
+    });
+    // An exception raised by the progress callback wins over the Cancelled it caused.
+    if let Some(e) = raised.lock().unwrap_or_else(|e| e.into_inner()).take() {
+        return Err(e);
+    }
+    let (result, seconds) = outcome?;
 
     let n_faces = result.face_chart.len();
     let n_new = result.new_seams.len();
@@ -374,6 +391,37 @@ fn unwrap(
         seconds,
         method: method_name,
         new_seams: new_seams.unbind(),
+        non_manifold_edges: result.non_manifold_edges,
+    })
+}
+
+/// Least time between two calls of a Python progress callback (the last chart always calls).
+const PROGRESS_INTERVAL: Duration = Duration::from_millis(100);
+
+/// The core's [`Progress`] calling the Python `callback(charts_done, charts_total)` with the
+/// GIL re-acquired, at most every [`PROGRESS_INTERVAL`]. A `False` return cancels; an exception
+/// cancels and is kept in `raised` to be re-raised by `unwrap`.
+fn python_progress(callback: Py<PyAny>, raised: Arc<Mutex<Option<PyErr>>>) -> Progress {
+    let last: Mutex<Option<Instant>> = Mutex::new(None);
+    Progress::with_callback(move |done, total| {
+        {
+            let mut last = last.lock().unwrap_or_else(|e| e.into_inner());
+            let now = Instant::now();
+            if done < total && last.is_some_and(|t| now.duration_since(t) < PROGRESS_INTERVAL) {
+                return true;
+            }
+            *last = Some(now);
+        }
+        Python::attach(|py| match callback.call1(py, (done, total)) {
+            Ok(v) => {
+                let v = v.bind(py);
+                !(v.is_instance_of::<PyBool>() && !v.is_truthy().unwrap_or(true))
+            }
+            Err(e) => {
+                raised.lock().unwrap_or_else(|e| e.into_inner()).get_or_insert(e);
+                false
+            }
+        })
     })
 }
 
@@ -425,6 +473,7 @@ fn _uvflat(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyChartReport>()?;
     m.add_class::<PyMetrics>()?;
     m.add("METHODS", PyTuple::new(py, method_names())?)?;
+    m.add("METHOD_OPTIONS", options::method_options_dict(py)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     errors::register(m)?;
     Ok(())

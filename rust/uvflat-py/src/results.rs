@@ -58,6 +58,8 @@ pub struct PyChartReport {
     pub cones: usize,
     /// Total 3D length of the automatic seams made for this chart (0 if it was not cut).
     pub cut_length: f64,
+    /// Stable code of the outcome beside the prose `reason` (see `ChartReport::reason_code`).
+    pub reason_code: String,
 }
 
 impl From<&ChartReport> for PyChartReport {
@@ -83,6 +85,7 @@ impl From<&ChartReport> for PyChartReport {
             seconds: r.seconds,
             cones: r.cones,
             cut_length: r.cut_length,
+            reason_code: r.reason_code().to_string(),
         }
     }
 }
@@ -107,6 +110,7 @@ impl PyChartReport {
         d.set_item("conformal", self.conformal)?;
         d.set_item("area", self.area)?;
         d.set_item("symmetric_dirichlet", self.symmetric_dirichlet)?;
+        d.set_item("reason_code", &self.reason_code)?;
         d.set_item("seconds", self.seconds)?;
         d.set_item("cones", self.cones)?;
         d.set_item("cut_length", self.cut_length)?;
@@ -151,6 +155,7 @@ pub struct PyUnwrapResult {
     pub seconds: f64,
     pub method: String,
     pub new_seams: Py<PyArray2<u32>>,
+    pub non_manifold_edges: usize,
 }
 
 impl PyUnwrapResult {
@@ -203,6 +208,13 @@ impl PyUnwrapResult {
         self.new_seams.bind(py).clone()
     }
 
+    /// Edges of the selection used by three or more selected faces; each was treated as a
+    /// seam. Many of them shred a mesh into many small charts.
+    #[getter]
+    fn non_manifold_edges(&self) -> usize {
+        self.non_manifold_edges
+    }
+
     /// All fields as a plain dict (arrays included, reports as dicts).
     fn as_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);
@@ -214,6 +226,7 @@ impl PyUnwrapResult {
         d.set_item("charts", PyList::new(py, reports)?)?;
         d.set_item("seconds", self.seconds)?;
         d.set_item("new_seams", self.new_seams.bind(py))?;
+        d.set_item("non_manifold_edges", self.non_manifold_edges)?;
         Ok(d)
     }
 
@@ -258,6 +271,7 @@ pub struct PyMetrics {
     overlapping_charts: usize,
     distortion: Distortion,
     per_chart: Vec<ChartMetrics>,
+    per_face: Vec<[f64; 2]>,
 }
 
 impl From<MeshMetrics> for PyMetrics {
@@ -268,6 +282,7 @@ impl From<MeshMetrics> for PyMetrics {
             overlapping_charts: m.overlapping_charts,
             distortion: m.distortion,
             per_chart: m.per_chart,
+            per_face: m.per_face,
         }
     }
 }
@@ -320,6 +335,18 @@ impl PyMetrics {
         let items = self.per_chart.iter().map(|c| chart_metrics_dict(py, c)).collect::<PyResult<Vec<_>>>()?;
         PyList::new(py, items)
     }
+    /// Conformal distortion of every face, shape (F,), float64: the 3D-area-weighted mean of
+    /// sigma1/sigma2 over its triangles (chart area-normalised). NaN for faces not measured or
+    /// without 3D area, inf where a triangle's UV has zero area.
+    #[getter]
+    fn face_conformal<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_vec(py, self.per_face.iter().map(|d| d[0]).collect())
+    }
+    /// Area distortion of every face, shape (F,), float64 (max(J, 1/J), as `face_conformal`).
+    #[getter]
+    fn face_area<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_vec(py, self.per_face.iter().map(|d| d[1]).collect())
+    }
     /// All fields as a plain dict.
     fn as_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);
@@ -328,6 +355,8 @@ impl PyMetrics {
         d.set_item("overlapping_charts", self.overlapping_charts)?;
         distortion_items(&d, &self.distortion)?;
         d.set_item("per_chart", self.per_chart(py)?)?;
+        d.set_item("face_conformal", self.face_conformal(py))?;
+        d.set_item("face_area", self.face_area(py))?;
         Ok(d)
     }
     fn __repr__(&self) -> String {

@@ -156,6 +156,12 @@ fn edge_key(a: u32, b: u32) -> u64 {
 /// Charts are numbered by their smallest face index. Never fails: problems of a single chart
 /// (non-orientable, non-manifold vertex) are recorded in [`Chart::defect`].
 pub fn build_charts(mesh: &PolyMesh<'_>, seams: &[[u32; 2]], selected: Option<&[bool]>) -> Vec<Chart> {
+    build_charts_counting(mesh, seams, selected).0
+}
+
+/// [`build_charts`], also returning how many non-manifold edges (used by three or more
+/// selected faces) were treated as seams.
+pub fn build_charts_counting(mesh: &PolyMesh<'_>, seams: &[[u32; 2]], selected: Option<&[bool]>) -> (Vec<Chart>, usize) {
     let n_faces = mesh.n_faces();
     let n_corners = mesh.n_corners();
     let is_sel = |f: usize| selected.is_none_or(|s| s[f]);
@@ -184,12 +190,16 @@ pub fn build_charts(mesh: &PolyMesh<'_>, seams: &[[u32; 2]], selected: Option<&[
     // joined[c]: the polygon edge starting at corner c continues into another face of the chart.
     let mut joined = vec![false; n_corners];
     let mut face_uf = UnionFind::new(n_faces);
+    let mut non_manifold = 0usize;
     let mut corner_uf = UnionFind::new(n_corners);
     let mut i = 0;
     while i < recs.len() {
         let mut j = i + 1;
         while j < recs.len() && recs[j].0 == recs[i].0 {
             j += 1;
+        }
+        if j - i > 2 {
+            non_manifold += 1;
         }
         if j - i == 2 && !seam_set.contains(&recs[i].0) {
             let c1 = recs[i].1 as usize;
@@ -226,7 +236,8 @@ pub fn build_charts(mesh: &PolyMesh<'_>, seams: &[[u32; 2]], selected: Option<&[
     let corner_root: Vec<u32> = (0..n_corners as u32).map(|c| corner_uf.find(c)).collect();
 
     use rayon::prelude::*;
-    chart_faces.into_par_iter().map(|faces| make_chart(mesh, faces, &corner_root, &joined)).collect()
+    let charts = chart_faces.into_par_iter().map(|faces| make_chart(mesh, faces, &corner_root, &joined)).collect();
+    (charts, non_manifold)
 }
 
 fn make_chart(mesh: &PolyMesh<'_>, faces: Vec<u32>, corner_root: &[u32], joined: &[bool]) -> Chart {

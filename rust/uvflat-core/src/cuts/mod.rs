@@ -79,24 +79,24 @@ impl AutoSeamOptions {
     pub fn validate(&self, n_vertices: usize) -> Result<()> {
         if !(self.max_stretch.is_finite() && self.max_stretch > 1.0) {
             return Err(UvError::Option {
-                name: "max_stretch",
+                name: "max_stretch".into(),
                 reason: format!("must be a finite number greater than 1, got {}", self.max_stretch),
             });
         }
         if self.max_cones > 1000 {
-            return Err(UvError::Option { name: "max_cones", reason: format!("must be at most 1000, got {}", self.max_cones) });
+            return Err(UvError::Option { name: "max_cones".into(), reason: format!("must be at most 1000, got {}", self.max_cones) });
         }
         if let Some(a) = self.sharp_angle {
             if !(a.is_finite() && a > 0.0 && a < std::f64::consts::PI) {
                 return Err(UvError::Option {
-                    name: "sharp_angle",
+                    name: "sharp_angle".into(),
                     reason: format!("must be an angle in radians strictly between 0 and π, got {a}"),
                 });
             }
         }
         if let Some((i, &v)) = self.avoid_vertices.iter().enumerate().find(|(_, &v)| v as usize >= n_vertices) {
             return Err(UvError::Option {
-                name: "avoid_vertices",
+                name: "avoid_vertices".into(),
                 reason: format!("entry {i}: vertex index {v} out of range (mesh has {n_vertices} vertices)"),
             });
         }

@@ -920,7 +920,7 @@ fn newton(p: &Problem<'_>, s: &mut State, opts: &AbfOptions) -> Result<Run, Solv
         if e.residual < opts.tolerance && e.stationarity < stat_tol && e.complementarity < opts.tolerance {
             return Ok(run(true));
         }
-        if it >= opts.max_iterations {
+        if it >= opts.max_iterations || crate::progress::cancelled() {
             return Ok(run(false));
         }
         // Near the solution try a chord step first; keep it if it cuts both errors enough.

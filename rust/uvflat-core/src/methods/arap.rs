@@ -206,7 +206,7 @@ pub fn solve_with_history(
     let mut change = 0.0;
     let mut iterations = 0;
     let mut stopped = None;
-    while iterations < options.max_iterations && energy > 1e-15 {
+    while iterations < options.max_iterations && energy > 1e-15 && !crate::progress::cancelled() {
         // Local step: closest rotations; right-hand side Σ A_f R_f D_f per vertex.
         let contrib: Vec<[[f64; 2]; 3]> = tris
             .par_iter()

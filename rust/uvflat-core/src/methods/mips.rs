@@ -377,6 +377,9 @@ pub fn solve_with_history(
     let mut change = f64::INFINITY;
     let mut shift = 1e-10;
     for _ in 0..options.max_iterations {
+        if crate::progress::cancelled() {
+            break; // the unwrap discards this chart
+        }
         // Per-triangle gradient and projected Hessian blocks (normalised like the energy).
         let blocks: Vec<([f64; 6], [f64; 21])> = rest
             .par_iter()

@@ -10,6 +10,7 @@ pub mod harmonic;
 pub mod lscm;
 pub mod mean_value;
 pub mod mips;
+pub mod options;
 pub mod scaffold;
 pub mod slim;
 pub mod spectral;
@@ -100,8 +101,8 @@ pub fn method_names() -> &'static [&'static str] {
     &["tutte", "harmonic", "mean_value", "lscm", "spectral", "abf", "arap", "slim", "mips", "scaffold"]
 }
 
-fn opt_err(name: &'static str, reason: impl Into<String>) -> UvError {
-    UvError::Option { name, reason: reason.into() }
+fn opt_err(name: impl Into<String>, reason: impl Into<String>) -> UvError {
+    UvError::Option { name: name.into(), reason: reason.into() }
 }
 
 fn as_float(name: &'static str, v: &OptionValue) -> Result<f64> {
@@ -194,10 +195,8 @@ impl Method {
                     if !method_names().contains(&name) {
                         break;
                     }
-                    return Err(UvError::Option {
-                        name: "options",
-                        reason: format!("method {name:?} has no option {key:?}"),
-                    });
+                    // Name the offending keyword, not the catch-all `**options`.
+                    return Err(opt_err(key.as_str(), format!("method {name:?} has no option {key:?}")));
                 }
             }
         }

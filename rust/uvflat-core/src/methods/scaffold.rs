@@ -580,6 +580,9 @@ fn run(
     // Global steps that needed a diagonal shift to factor, and the largest relative shift.
     let (mut shifts, mut largest_shift) = (0usize, 0.0f64);
     for _ in 0..options.max_iterations {
+        if crate::progress::cancelled() {
+            break; // the unwrap discards this chart
+        }
         let t0 = Instant::now();
         // Scaffold: the Delaunay re-mesh of the free space around the current map (SCAF), unless
         // it would need a new symbolic analysis while the previous scaffold neither limited the

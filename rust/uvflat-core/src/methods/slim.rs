@@ -313,7 +313,7 @@ pub fn solve_with_history(
     let mut change = 0.0;
     let mut iterations = 0;
     let mut stopped = None;
-    while iterations < options.max_iterations {
+    while iterations < options.max_iterations && !crate::progress::cancelled() {
         let t0 = Instant::now();
         let rhs_parts: Vec<[[f64; 2]; 3]> = values
             .par_chunks_mut(local.len())

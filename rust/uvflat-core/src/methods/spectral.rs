@@ -111,6 +111,9 @@ pub fn solve(chart: &Chart, pins: &[(u32, [f64; 2])], options: &SpectralOptions)
     let mut iterations = 0;
     let mut change = f64::INFINITY;
     for it in 0..options.max_iterations {
+        if crate::progress::cancelled() {
+            break; // the unwrap discards this chart
+        }
         iterations = it + 1;
         let rhs: Vec<f64> = x.iter().zip(&b).map(|(a, w)| a * w).collect();
         let y = factor.solve(&[vec![]], &[rhs])?;

@@ -8,7 +8,9 @@
 //! * overlap: the chart's UV boundary crosses or touches itself;
 //! * conformal Σ w σ1/σ2; area Σ w max(σ1σ2, 1/(σ1σ2)); symmetric Dirichlet
 //!   Σ w (σ1² + σ2² + σ1⁻² + σ2⁻²)/4. All are 1 for an isometry; a zero-area UV triangle with
-//!   positive 3D area makes them infinite.
+//!   positive 3D area makes them infinite. Triangles with zero 3D area have weight 0 (they are
+//!   still counted as flips when their UV triangle has zero area); a chart with no 3D area at
+//!   all has every triangle counted as a flip and infinite distortion, never NaN.
 
 use crate::charts::build_charts;
 use crate::error::{Result, UvError};
@@ -60,6 +62,11 @@ pub struct MeshMetrics {
     pub distortion: Distortion,
     /// One entry per chart.
     pub per_chart: Vec<ChartMetrics>,
+    /// `[conformal, area]` distortion of every input face ([`measure`] only; empty from
+    /// [`aggregate`]): the 3D-area-weighted mean over the face's triangles, chart
+    /// area-normalised. NaN for faces not measured (unselected) or without 3D area, ∞ where a
+    /// triangle's UV has zero area.
+    pub per_face: Vec<[f64; 2]>,
 }
 
 /// Singular values (σ1 ≥ σ2 ≥ 0) and sign of the determinant of a 2×2 matrix [[a, b], [c, d]].
@@ -119,6 +126,64 @@ pub fn count_flips(triangles: &[[u32; 3]], uv: &[[f64; 2]]) -> usize {
     flipped_triangles(triangles, uv).iter().filter(|&&f| f).count()
 }
 
+/// Singular values (σ1, σ2) of the Jacobian from 3D triangle `p` (in its own plane) to UV
+/// triangle `q2` scaled by `scale`; `(∞, 0)` for a degenerate UV triangle. Precondition: `p`
+/// has positive area.
+fn triangle_singular_values(p: [[f64; 3]; 3], q2: [[f64; 2]; 3], scale: f64, degenerate: bool) -> (f64, f64) {
+    if degenerate {
+        return (f64::INFINITY, 0.0);
+    }
+    let q = local_frame(p);
+    // J = [du1 du2] · inv([dq1 dq2])
+    let (x1, y1) = (q[1][0] - q[0][0], q[1][1] - q[0][1]);
+    let (x2, y2) = (q[2][0] - q[0][0], q[2][1] - q[0][1]);
+    let det = x1 * y2 - x2 * y1;
+    let (u1, v1) = (scale * (q2[1][0] - q2[0][0]), scale * (q2[1][1] - q2[0][1]));
+    let (u2, v2) = (scale * (q2[2][0] - q2[0][0]), scale * (q2[2][1] - q2[0][1]));
+    // inv = 1/det [[y2, -x2], [-y1, x1]]
+    let a11 = (u1 * y2 - u2 * y1) / det;
+    let a12 = (-u1 * x2 + u2 * x1) / det;
+    let a21 = (v1 * y2 - v2 * y1) / det;
+    let a22 = (-v1 * x2 + v2 * x1) / det;
+    let (s1, s2, _) = singular_values_2x2(a11, a12, a21, a22);
+    (s1, s2)
+}
+
+/// Per-triangle conformal (σ1/σ2) and area (max(σ1σ2, 1/(σ1σ2))) distortion of one chart,
+/// after the same area normalisation as [`chart_metrics`]. A triangle without 3D area gets
+/// NaN (it has no weight); a zero-area UV triangle gets ∞; in a chart without 3D area every
+/// triangle gets ∞.
+pub fn triangle_distortion(positions: &[[f64; 3]], triangles: &[[u32; 3]], uv: &[[f64; 2]]) -> Vec<[f64; 2]> {
+    let get3 = |t: &[u32; 3]| [positions[t[0] as usize], positions[t[1] as usize], positions[t[2] as usize]];
+    let get2 = |t: &[u32; 3]| [uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]];
+    let area3: f64 = triangles.iter().map(|t| triangle_area(get3(t))).sum();
+    let area2: f64 = triangles.iter().map(|t| signed_area_2d(get2(t)).abs()).sum();
+    if !(area3 > 0.0) || !(area2 > 0.0) {
+        return vec![[f64::INFINITY; 2]; triangles.len()];
+    }
+    let scale = (area3 / area2).sqrt();
+    triangles
+        .iter()
+        .map(|t| {
+            let p = get3(t);
+            if triangle_area(p) <= 0.0 {
+                return [f64::NAN; 2];
+            }
+            let q2 = get2(t);
+            let e1 = [q2[1][0] - q2[0][0], q2[1][1] - q2[0][1]];
+            let e2 = [q2[2][0] - q2[0][0], q2[2][1] - q2[0][1]];
+            let edges = e1[0].hypot(e1[1]) * e2[0].hypot(e2[1]);
+            let degenerate = edges == 0.0 || signed_area_2d(q2).abs() <= 1e-12 * edges;
+            let (s1, s2) = triangle_singular_values(p, q2, scale, degenerate);
+            if s2 > 0.0 && s1.is_finite() {
+                [s1 / s2, (s1 * s2).max(1.0 / (s1 * s2))]
+            } else {
+                [f64::INFINITY; 2]
+            }
+        })
+        .collect()
+}
+
 /// Measure one chart given per-vertex positions and UVs over its triangles.
 pub fn chart_metrics(
     positions: &[[f64; 3]],
@@ -141,6 +206,17 @@ pub fn chart_metrics(
         area3 += triangle_area(get3(t));
         area2 += signed_area_2d(get2(t)).abs();
     }
+    if !(area3 > 0.0) {
+        // No 3D area: the area-normalised UV map is a single point, so every triangle is a
+        // zero-area UV triangle (a flip) and the distortion is infinite, never NaN.
+        return ChartMetrics {
+            faces: triangles.len(),
+            flips: triangles.len(),
+            overlap: boundary_self_overlap(uv, boundary_loops),
+            distortion: Distortion { conformal: f64::INFINITY, area: f64::INFINITY, symmetric_dirichlet: f64::INFINITY },
+            area_3d: 0.0,
+        };
+    }
     let scale = if area2 > 0.0 { (area3 / area2).sqrt() } else { 1.0 };
     let flips = flipped.iter().filter(|&&f| f).count();
     let mut sum = [0.0f64; 3];
@@ -149,27 +225,11 @@ pub fn chart_metrics(
         let degenerate = bad && uv_zero_area(q2);
         let p = get3(t);
         let w = triangle_area(p);
-        if w <= 0.0 || area3 <= 0.0 {
+        if w <= 0.0 {
+            // Zero 3D area: weight 0 in the area-weighted distortion.
             continue;
         }
-        let (s1, s2) = if degenerate || area2 == 0.0 {
-            (f64::INFINITY, 0.0)
-        } else {
-            let q = local_frame(p);
-            // J = [du1 du2] · inv([dq1 dq2])
-            let (x1, y1) = (q[1][0] - q[0][0], q[1][1] - q[0][1]);
-            let (x2, y2) = (q[2][0] - q[0][0], q[2][1] - q[0][1]);
-            let det = x1 * y2 - x2 * y1;
-            let (u1, v1) = (scale * (q2[1][0] - q2[0][0]), scale * (q2[1][1] - q2[0][1]));
-            let (u2, v2) = (scale * (q2[2][0] - q2[0][0]), scale * (q2[2][1] - q2[0][1]));
-            // inv = 1/det [[y2, -x2], [-y1, x1]]
-            let a11 = (u1 * y2 - u2 * y1) / det;
-            let a12 = (-u1 * x2 + u2 * x1) / det;
-            let a21 = (v1 * y2 - v2 * y1) / det;
-            let a22 = (-v1 * x2 + v2 * x1) / det;
-            let (s1, s2, _) = singular_values_2x2(a11, a12, a21, a22);
-            (s1, s2)
-        };
+        let (s1, s2) = triangle_singular_values(p, q2, scale, degenerate);
         let wn = w / area3;
         if s2 > 0.0 && s1.is_finite() {
             sum[0] += wn * s1 / s2;
@@ -178,10 +238,6 @@ pub fn chart_metrics(
         } else {
             sum = [f64::INFINITY; 3];
         }
-    }
-    if !(area3 > 0.0) {
-        // No 3D area: distortion is undefined, not perfect.
-        sum = [f64::NAN; 3];
     }
     let overlap = boundary_self_overlap(uv, boundary_loops);
     ChartMetrics {
@@ -505,7 +561,7 @@ pub fn measure(
         i = j;
     }
     let charts = build_charts(&mesh, &seams, selected);
-    let per_chart: Vec<ChartMetrics> = {
+    let measured: Vec<(ChartMetrics, Vec<(u32, [f64; 2])>)> = {
         use rayon::prelude::*;
         charts
             .par_iter()
@@ -516,17 +572,62 @@ pub fn measure(
                 }
                 let mut m = chart_metrics(&ch.positions, &ch.triangles, &vuv, &ch.boundary_loops);
                 m.faces = ch.faces.len();
-                m
+                (m, face_distortion(ch, &vuv))
             })
             .collect()
     };
-    Ok(aggregate(per_chart))
+    let mut per_face = vec![[f64::NAN; 2]; mesh.n_faces()];
+    let mut per_chart = Vec::with_capacity(measured.len());
+    for (m, faces) in measured {
+        for (f, d) in faces {
+            per_face[f as usize] = d;
+        }
+        per_chart.push(m);
+    }
+    let mut out = aggregate(per_chart);
+    out.per_face = per_face;
+    Ok(out)
+}
+
+/// `(face, [conformal, area])` of every face of `chart`: 3D-area-weighted mean of its
+/// triangles' [`triangle_distortion`]; NaN for a face without 3D area.
+fn face_distortion(chart: &crate::charts::Chart, uv: &[[f64; 2]]) -> Vec<(u32, [f64; 2])> {
+    let per_tri = triangle_distortion(&chart.positions, &chart.triangles, uv);
+    let mut acc: std::collections::HashMap<u32, ([f64; 2], f64)> = std::collections::HashMap::new();
+    for ((t, &f), d) in chart.triangles.iter().zip(&chart.triangle_face).zip(&per_tri) {
+        let p = [chart.positions[t[0] as usize], chart.positions[t[1] as usize], chart.positions[t[2] as usize]];
+        let w = triangle_area(p);
+        let e = acc.entry(f).or_insert(([0.0; 2], 0.0));
+        if w > 0.0 {
+            e.0[0] += w * d[0];
+            e.0[1] += w * d[1];
+            e.1 += w;
+        }
+    }
+    chart
+        .faces
+        .iter()
+        .map(|&f| {
+            let d = match acc.get(&f) {
+                Some(&(s, w)) if w > 0.0 => [s[0] / w, s[1] / w],
+                _ => [f64::NAN; 2],
+            };
+            (f, d)
+        })
+        .collect()
 }
 
 /// Combine per-chart metrics into whole-mesh metrics (distortion weighted by 3D area).
 pub fn aggregate(per_chart: Vec<ChartMetrics>) -> MeshMetrics {
     let total: f64 = per_chart.iter().map(|c| c.area_3d).sum();
-    let mut d = if total > 0.0 { [0.0f64; 3] } else { [f64::NAN; 3] };
+    // No charts: NaN (nothing measured); charts but no 3D area: infinite (see chart_metrics).
+    let mut d = if total > 0.0 {
+        [0.0f64; 3]
+    } else if per_chart.is_empty() {
+        [f64::NAN; 3]
+    } else {
+        [f64::INFINITY; 3]
+    };
     for c in &per_chart {
         if c.area_3d > 0.0 && total > 0.0 {
             let w = c.area_3d / total;
@@ -541,6 +642,7 @@ pub fn aggregate(per_chart: Vec<ChartMetrics>) -> MeshMetrics {
         overlapping_charts: per_chart.iter().filter(|c| c.overlap).count(),
         distortion: Distortion { conformal: d[0], area: d[1], symmetric_dirichlet: d[2] },
         per_chart,
+        per_face: Vec::new(),
     }
 }
 

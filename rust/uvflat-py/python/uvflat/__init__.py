@@ -17,8 +17,10 @@ UVs are per corner (Blender's "loop"), so a seam can give one vertex several UVs
 """
 
 from ._uvflat import (
+    METHOD_OPTIONS,
     METHODS,
     AngleSumError,
+    Cancelled,
     ChartReport,
     FaceSizeError,
     InputError,
@@ -35,12 +37,14 @@ from ._uvflat import (
     __version__,
     factorization_seconds,
     metrics,
-    unwrap,
 )
+from ._uvflat import unwrap as _native_unwrap
 
 __all__ = [
+    "METHOD_OPTIONS",
     "METHODS",
     "AngleSumError",
+    "Cancelled",
     "ChartReport",
     "FaceSizeError",
     "InputError",
@@ -59,3 +63,85 @@ __all__ = [
     "metrics",
     "unwrap",
 ]
+
+
+def unwrap(positions, corner_verts, face_sizes, *, method="lscm", seams=None, selected=None,
+           pins=None, pin_uvs=None, fit_to=None, auto_seams=True, max_stretch=2.0, max_cones=8,
+           avoid_vertices=None, sharp_angle=None, progress=None, **options):
+    """Unwrap the selected faces of a polygon mesh into per-corner UVs.
+
+    The selection is split into charts along seams, non-manifold edges (counted in
+    ``UnwrapResult.non_manifold_edges``) and the selection border; every chart is mapped by
+    ``method`` (charts in parallel, without the GIL). With ``auto_seams`` (the default) a
+    closed chart or a chart with handles is cut open through a few cone singularities (the
+    edges cut are in ``UnwrapResult.new_seams``; a piece whose flattening still flips, overlaps
+    or stretches beyond ``max_stretch`` gets more cones or is split). Charts that cannot be
+    mapped are not errors: they come back with ``status == "failed"`` and a ``reason``, and
+    their faces get no UVs.
+
+    Args:
+        positions: (V, 3) vertex positions.
+        corner_verts: (C,) vertex index of every corner, faces one after another.
+        face_sizes: (F,) corners per face (each >= 3), summing to C.
+        method: one of :data:`METHODS`: "tutte", "harmonic", "mean_value", "lscm",
+            "spectral", "abf", "arap", "slim", "mips", "scaffold".
+        seams: (E, 2) seam edges as vertex pairs (either order).
+        selected: (F,) faces to unwrap; default all. Unselected faces get chart -1.
+        pins: (P,) corner indices whose UVs are fixed.
+        pin_uvs: (P, 2) the UVs of the pinned corners (required with ``pins``).
+        fit_to: (C, 2) previous UVs: each unpinned chart is fitted (scale, rotation,
+            translation) onto them instead of being area-scaled at the origin.
+        auto_seams: cut closed and higher-genus charts automatically (default True); with
+            False they fail with a "mark seams" reason.
+        max_stretch: how much the length scale may vary inside one island (> 1, default
+            2.0): cones are added while the predicted scale factor exceeds it, and a piece
+            whose area distortion exceeds (1 + max_stretch) / 2 gets another cone or is split.
+        max_cones: most cone singularities per chart (default 8; a closed sphere gets at
+            least 2).
+        avoid_vertices: (K,) mesh vertex indices where seams must not go (no cut edge touches
+            them and none becomes a cone).
+        sharp_angle: dihedral angle in radians from which an edge counts as sharp and is
+            preferred for seams; default None (no preference).
+        progress: ``callable(charts_done, charts_total)``, called from the worker threads
+            with the GIL held, at most every 0.1 s and once after the last chart; returning
+            ``False`` cancels the unwrap (it raises :class:`Cancelled`); an exception it raises
+            cancels too and is re-raised. Cancellation is polled between charts and between
+            iterations of the iterative methods.
+        **options: the method's own options (any other keyword is an OptionError naming it):
+
+            * tutte, harmonic, mean_value: ``boundary`` "circle" (default), "square" or
+              "virtual".
+            * lscm: none.
+            * spectral: ``max_iterations`` (int >= 1, default 200), ``tolerance`` (float,
+              default 1e-10).
+            * abf: ``solver`` "abf++" (default) or "abf"; ``boundary`` "free" (default) or
+              "convex"; ``max_iterations`` (default 30); ``tolerance`` (default 1e-9);
+              ``angle_sums=(vertices, sums)``: (K,) mesh vertex indices and (K,) angle sums
+              in radians the flattened map must have there (pi keeps a boundary straight,
+              pi/2 makes a right-angled corner; an interior sum other than 2*pi is a cone).
+            * arap: ``max_iterations`` (default 100), ``tolerance`` (default 1e-6).
+            * slim: ``max_iterations`` (default 15), ``tolerance`` (default 1e-4), ``start``
+              "auto" (default) or "mean_value".
+            * mips: ``max_iterations`` (default 50), ``tolerance`` (default 1e-6).
+            * scaffold: ``max_iterations`` (default 100), ``tolerance`` (default 1e-4).
+
+    Returns:
+        UnwrapResult: per-corner ``uv``, per-face ``chart`` and ``face_solved``, one
+        ``ChartReport`` per chart (with ``cones`` and ``cut_length``), ``seconds``,
+        ``new_seams`` and ``non_manifold_edges``.
+
+    Raises:
+        InputError: wrong shape, dtype or length; a non-finite ``fit_to`` UV.
+        VertexIndexError, NonFiniteError, FaceSizeError, RepeatedVertexError, SeamError:
+            malformed mesh (all subclasses of MeshError).
+        PinError: a pin names a missing corner or has a non-finite UV.
+        OptionError: unknown method, unknown option (``err.option`` names it) or bad value.
+        AngleSumError: a bad ``angle_sums`` entry (an OptionError naming entry and vertex).
+        Cancelled: the progress callback returned ``False``.
+        UvflatError: an internal error (a bug), never a crash.
+    """
+    return _native_unwrap(positions, corner_verts, face_sizes, method=method, seams=seams,
+                          selected=selected, pins=pins, pin_uvs=pin_uvs, fit_to=fit_to,
+                          auto_seams=auto_seams, max_stretch=max_stretch, max_cones=max_cones,
+                          avoid_vertices=avoid_vertices, sharp_angle=sharp_angle,
+                          progress=progress, **options)

@@ -6,7 +6,9 @@ face, summing to C). UVs are per corner. Any integer dtype is accepted for indic
 float (or integer) dtype for coordinates; everything is converted to uint32 / float64.
 """
 
-from typing import Any, Final, Literal, TypedDict
+from typing import Any, Callable, Final, Literal, TypedDict
+
+from typing_extensions import Unpack
 
 import numpy as np
 import numpy.typing as npt
@@ -15,6 +17,44 @@ __version__: Final[str]
 
 METHODS: Final[tuple[str, ...]]
 """Names accepted by ``unwrap(method=...)``, e.g. ``("tutte", "harmonic", "mean_value", "lscm", "spectral")``."""
+
+class OptionSpec(TypedDict):
+    """One declared option of a method (see :data:`METHOD_OPTIONS`)."""
+
+    name: str
+    type: Literal["int", "float", "choice", "vertex_values"]
+    default: int | float | str | None
+    min: int | float | None
+    max: int | None
+    min_exclusive: bool
+    choices: tuple[str, ...] | None
+    doc: str
+
+METHOD_OPTIONS: Final[dict[str, tuple[OptionSpec, ...]]]
+"""Every method's options as the core declares them: name, type, default, range, choices, doc.
+The single source the add-on, the batch script and this stub are tested against."""
+
+Method = Literal["tutte", "harmonic", "mean_value", "lscm", "spectral", "abf", "arap", "slim",
+                 "mips", "scaffold"]
+"""Every method of :data:`METHODS`."""
+
+class UnwrapOptions(TypedDict, total=False):
+    """Keyword options of :func:`unwrap`; each method takes only the ones listed for it, any
+    other keyword is an :class:`OptionError` naming it."""
+
+    boundary: Literal["circle", "square", "virtual", "free", "convex"]
+    """tutte, harmonic, mean_value: "circle" (default), "square" or "virtual";
+    abf: "free" (default) or "convex"."""
+    max_iterations: int
+    """spectral (200), abf (30), arap (100), slim (15), mips (50), scaffold (100); >= 1."""
+    tolerance: float
+    """spectral (1e-10), abf (1e-9), arap (1e-6), slim (1e-4), mips (1e-6), scaffold (1e-4)."""
+    solver: Literal["abf++", "abf"]
+    """abf: "abf++" (default, block elimination) or "abf" (the full system by sparse LU)."""
+    angle_sums: tuple[npt.ArrayLike, npt.ArrayLike]
+    """abf: ((K,) mesh vertex indices, (K,) angle sums in radians)."""
+    start: Literal["auto", "mean_value"]
+    """slim: flip-free start, "auto" (default) or "mean_value"."""
 
 _ChartKind = Literal["disk", "disk_with_holes", "closed", "higher_genus"]
 _ChartStatus = Literal["solved", "fallback", "failed"]
@@ -86,6 +126,10 @@ class ChartReport:
     @property
     def cut_length(self) -> float:
         """Total 3D length of the automatic seams made for this chart (0 if it was not cut)."""
+    @property
+    def reason_code(self) -> Literal["solved", "solved_with_note", "fallback", "failed_closed",
+                                     "failed_genus", "failed_defect", "failed_solver"]:
+        """Stable code of the outcome, beside the prose ``reason``."""
     def as_dict(self) -> dict[str, Any]:
         """All fields as a plain dict."""
 
@@ -113,6 +157,10 @@ class UnwrapResult:
     @property
     def new_seams(self) -> npt.NDArray[np.uint32]:
         """Seams added by automatic seams, shape (K, 2), vertex pairs (a < b), sorted."""
+    @property
+    def non_manifold_edges(self) -> int:
+        """Edges of the selection used by three or more selected faces; each was treated as a
+        seam (many of them shred a mesh into many small charts)."""
     def as_dict(self) -> dict[str, Any]:
         """All fields as a plain dict (arrays included, chart reports as dicts)."""
 
@@ -156,6 +204,14 @@ class Metrics:
     @property
     def per_chart(self) -> list[_ChartMetricsDict]:
         """Per-island faces, flips, overlap, distortions and 3D area."""
+    @property
+    def face_conformal(self) -> npt.NDArray[np.float64]:
+        """Conformal distortion of every face, shape (F,): 3D-area-weighted mean of
+        sigma1/sigma2 over its triangles; NaN for faces not measured or without 3D area,
+        inf where a UV triangle has zero area."""
+    @property
+    def face_area(self) -> npt.NDArray[np.float64]:
+        """Area distortion of every face, shape (F,), as ``face_conformal``."""
     def as_dict(self) -> dict[str, Any]:
         """All fields as a plain dict."""
 
@@ -164,7 +220,7 @@ def unwrap(
     corner_verts: _Ints,
     face_sizes: _Ints,
     *,
-    method: str = "lscm",
+    method: Method = "lscm",
     seams: _Ints | None = None,
     selected: _Bools | None = None,
     pins: _Ints | None = None,
@@ -175,7 +231,8 @@ def unwrap(
     max_cones: int = 8,
     avoid_vertices: _Ints | None = None,
     sharp_angle: float | None = None,
-    **options: bool | int | float | str | tuple[_Ints, _Floats],
+    progress: Callable[[int, int], bool | None] | None = None,
+    **options: Unpack[UnwrapOptions],
 ) -> UnwrapResult:
     """Unwrap the selected faces of a polygon mesh into per-corner UVs.
 
@@ -198,14 +255,19 @@ def unwrap(
         pin_uvs: (P, 2) the UVs of the pinned corners (required with ``pins``).
         fit_to: (C, 2) previous UVs: each unpinned chart is fitted (scale, rotation,
             translation) onto them instead of being area-scaled at the origin.
-        **options: method options: ``boundary="circle"|"square"`` for tutte, harmonic and
-            mean_value; ``max_iterations: int`` and ``tolerance: float`` for spectral.
-            For abf, ``boundary="free"|"convex"`` and ``angle_sums=(vertices, sums)``: (K,)
-            mesh vertex indices and (K,) angle sums in radians that the flattened map must
-            have there (every chart copy of a vertex split by a seam gets the sum). On the
-            boundary, pi keeps the outline straight and pi/2 makes a right-angled corner; at
-            an interior vertex a sum other than 2*pi is a cone, realised exactly when a seam
-            runs from it to the boundary.
+        **options: the method's own options, see :class:`UnwrapOptions`: tutte, harmonic,
+            mean_value: ``boundary``; lscm: none; spectral, arap, mips, scaffold:
+            ``max_iterations``, ``tolerance``; slim: those and ``start``; abf: ``solver``,
+            ``boundary``, ``max_iterations``, ``tolerance`` and ``angle_sums=(vertices, sums)``
+            ((K,) mesh vertex indices and (K,) angle sums in radians that the flattened map
+            must have there; every chart copy of a vertex split by a seam gets the sum; on the
+            boundary pi keeps the outline straight and pi/2 makes a right-angled corner; at an
+            interior vertex a sum other than 2*pi is a cone, realised exactly when a seam runs
+            from it to the boundary).
+        progress: ``callable(charts_done, charts_total)`` called from the worker threads with
+            the GIL held, at most every 0.1 s and after the last chart; returning ``False``
+            cancels (raises :class:`Cancelled`), an exception it raises cancels and is
+            re-raised. Polled between charts and between iterations of iterative methods.
         auto_seams: cut closed and higher-genus charts automatically (default True); with
             False they fail with a "mark seams" reason.
         max_stretch: how much the length scale may vary inside one island before another
@@ -224,6 +286,7 @@ def unwrap(
         PinError: a pin names a missing corner or has a non-finite UV.
         OptionError: unknown method, unknown option or bad option value.
         AngleSumError: a bad ``angle_sums`` entry (an OptionError naming entry and vertex).
+        Cancelled: the progress callback returned ``False``.
         UvflatError: an internal error (a bug), never a crash.
     """
 
@@ -347,3 +410,9 @@ class AngleSumError(OptionError):
     """The mesh vertex named by that entry."""
     value: float | None
     """The prescribed sum (None when the index itself could not be read)."""
+
+class Cancelled(UvflatError):
+    """The unwrap was cancelled by its progress callback (it returned False); no UVs."""
+
+    charts_done: int
+    charts_total: int

@@ -1,0 +1,103 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""Per-face quality of an unwrap, stored on the mesh so the artist can see it.
+
+After an unwrap, every solved face gets (faces not unwrapped keep their previous values, NaN
+on a mesh that never had them):
+
+* ``uvflat_conformal`` and ``uvflat_area`` (FACE, FLOAT): the conformal and area distortion of
+  the face as measured by ``uvflat.metrics`` (DESIGN.md definitions; 1 is perfect);
+* ``uvflat_flipped`` (FACE, BOOLEAN): the face's UV winding opposes its island's majority, or
+  its UV area is zero;
+* ``uvflat_conformal_color`` and ``uvflat_area_color`` (CORNER, BYTE_COLOR): the same
+  distortions as a heat map (blue 1, green, yellow, red at :data:`RED_AT` or more, grey where
+  not measured), shown by the sidebar's toggle through the viewport's attribute colours.
+
+Nothing here touches a mesh in edit mode; ``engine`` calls it between its mode switches.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import mesh_io
+
+CONFORMAL, AREA, FLIPPED = "uvflat_conformal", "uvflat_area", "uvflat_flipped"
+COLOR = {"conformal": "uvflat_conformal_color", "area": "uvflat_area_color"}
+ATTRIBUTES = (CONFORMAL, AREA, FLIPPED, *COLOR.values())
+RED_AT = 2.0  # distortion shown fully red
+
+_STOPS = np.array([0.0, 1 / 3, 2 / 3, 1.0])
+_RGB = np.array([[0.15, 0.35, 1.0], [0.15, 0.85, 0.3], [1.0, 0.85, 0.1], [0.9, 0.1, 0.1]])
+_GREY = (0.5, 0.5, 0.5)
+
+
+def heat_colors(values):
+    """RGBA in 0..1 for distortion ``values`` (>= 1): log scale from 1 (blue) to
+    :data:`RED_AT` (red); NaN grey, infinity red."""
+    values = np.asarray(values, dtype=np.float64)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        t = np.clip(np.log(np.maximum(values, 1.0)) / np.log(RED_AT), 0.0, 1.0)
+    t = np.where(np.isposinf(values), 1.0, t)
+    rgba = np.ones((len(values), 4))
+    for k in range(3):
+        rgba[:, k] = np.interp(t, _STOPS, _RGB[:, k])
+    rgba[np.isnan(values), :3] = _GREY
+    return rgba
+
+
+def flipped_faces(uv, face_sizes, chart, solved):
+    """Faces whose signed UV area (shoelace) opposes the majority of their chart, or is zero;
+    only ``solved`` faces can be flipped."""
+    uv = np.asarray(uv, dtype=np.float64)
+    face_sizes = np.asarray(face_sizes, dtype=np.int64)
+    n_f = len(face_sizes)
+    if n_f == 0:
+        return np.zeros(0, dtype=bool)
+    starts = np.zeros(n_f, dtype=np.int64)
+    np.cumsum(face_sizes[:-1], out=starts[1:])
+    nxt = np.arange(len(uv)) + 1
+    nxt[starts + face_sizes - 1] = starts
+    cross = uv[:, 0] * uv[nxt, 1] - uv[nxt, 0] * uv[:, 1]
+    area = np.add.reduceat(cross, starts) * 0.5
+    chart = np.asarray(chart, dtype=np.int64)
+    ok = np.asarray(solved, dtype=bool) & (chart >= 0)
+    sign = np.sign(area) * ok
+    votes = np.bincount(np.where(ok, chart, 0), weights=sign, minlength=chart.max(initial=0) + 1)
+    majority = np.where(votes[np.where(ok, chart, 0)] < 0, -1.0, 1.0)
+    return ok & (area * majority <= 0.0)
+
+
+def measure(core, job, new_uv, solved):
+    """``(conformal, area, flipped)`` per face of ``job``'s mesh for the ``solved`` faces."""
+    m = core.metrics(job.positions, job.corner_verts.astype(np.int64),
+                     job.face_sizes.astype(np.int64), new_uv.astype(np.float64),
+                     selected=solved)
+    flipped = flipped_faces(new_uv, job.face_sizes, np.asarray(job.result.chart), solved)
+    return np.asarray(m.face_conformal), np.asarray(m.face_area), flipped
+
+
+def write(mesh, face_sizes, solved, conformal, area, flipped):
+    """Store the measures of the ``solved`` faces (others keep theirs, see the module doc)."""
+    n_f = len(face_sizes)
+    old_c = mesh_io.read_attribute(mesh, CONFORMAL)
+    old_a = mesh_io.read_attribute(mesh, AREA)
+    old_f = mesh_io.read_attribute(mesh, FLIPPED)
+    c = np.where(solved, conformal, old_c if old_c is not None and len(old_c) == n_f else np.nan)
+    a = np.where(solved, area, old_a if old_a is not None and len(old_a) == n_f else np.nan)
+    f = np.where(solved, flipped, old_f if old_f is not None and len(old_f) == n_f else False)
+    mesh_io.write_attribute(mesh, CONFORMAL, "FACE", "FLOAT", c)
+    mesh_io.write_attribute(mesh, AREA, "FACE", "FLOAT", a)
+    mesh_io.write_attribute(mesh, FLIPPED, "FACE", "BOOLEAN", f)
+    for kind, values in (("conformal", c), ("area", a)):
+        rgba = np.repeat(heat_colors(values), face_sizes, axis=0)
+        mesh_io.write_attribute(mesh, COLOR[kind], "CORNER", "BYTE_COLOR", rgba)
+
+
+def snapshot(mesh):
+    """The stored state of every attribute of this module (restored on error)."""
+    return {name: mesh_io.save_attribute(mesh, name) for name in ATTRIBUTES}
+
+
+def restore(mesh, state):
+    for name, saved in state.items():
+        mesh_io.restore_attribute(mesh, name, saved)
