@@ -12,6 +12,7 @@ Goes through the add-on's own operator (``bpy.ops.uv.uvflat_unwrap``), registere
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import time
 from pathlib import Path
@@ -27,8 +28,15 @@ def log(message, t0=[time.perf_counter()]):  # noqa: B006 - start time of the ru
     print(f"[{time.perf_counter() - t0[0]:7.2f} s] {message}", flush=True)
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse whose errors are one line and exit status 1 (2 means unsolved charts)."""
+
+    def error(self, message):
+        raise SystemExit(f"{self.prog}: {message}")
+
+
 def parse_args(argv):
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         description="Unwrap a mesh file headlessly with uvflat.",
         formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     parser.add_argument("input", type=Path, help=".obj, .ply, .off or .blend")
@@ -55,7 +63,16 @@ def parse_args(argv):
                         help="write into a new UV map of this name (default: the active one)")
     parser.add_argument("--png", type=Path, default=None, help="UV layout image path")
     parser.add_argument("--size", type=int, default=1024, help="UV layout image size")
-    return parser.parse_args(argv)
+    args = parser.parse_args(argv)
+    if not (math.isfinite(args.margin) and 0.0 <= args.margin <= 1.0):
+        parser.error(f"--margin must be a number from 0 to 1, got {args.margin}")
+    if not 16 <= args.size <= 16384:
+        parser.error(f"--size must be from 16 to 16384 pixels, got {args.size}")
+    try:
+        common.check_mesh_file(args.input)
+    except common.MeshFileError as ex:
+        raise SystemExit(str(ex)) from None
+    return args
 
 
 def export(obj, path: Path):
@@ -104,15 +121,26 @@ def main(argv=None):
             # validate enum values against the property definition before touching the mesh
             prop = addon.methods.OPTIONS[key].make_property()
             items = getattr(prop, "keywords", {}).get("items")
+            flag = addon.methods.OPTIONS[key].keyword.replace("_", "-")
             if items and value not in [i[0] for i in items]:
-                flag = addon.methods.OPTIONS[key].keyword.replace("_", "-")
                 raise ValueError(f"--{flag} {value!r} "
                                  f"is not an option of {args.method}: {[i[0] for i in items]}")
+            # numbers within the property's range (Blender would clamp them silently)
+            low, high = (getattr(prop, "keywords", {}).get(k) for k in ("min", "max"))
+            if (low is not None and value < low) or (high is not None and value > high):
+                flag = "tolerance-exponent" if flag == "tolerance" else flag
+                raise ValueError(f"--{flag} {value} is out of range for {args.method}: "
+                                 f"from {low if low is not None else '-inf'} "
+                                 f"to {high if high is not None else 'inf'}")
     except ValueError as ex:
         raise SystemExit(str(ex)) from None
 
     log(f"loading {args.input}")
     obj = common.load_mesh_object(args.input)
+    try:
+        common.check_mesh_object(args.input, obj)
+    except common.MeshFileError as ex:
+        raise SystemExit(str(ex)) from None
     mesh = obj.data
     log(f"loaded '{obj.name}': {len(mesh.vertices)} vertices, {len(mesh.polygons)} faces")
 
