@@ -271,7 +271,11 @@ struct Stats(std::sync::Mutex<std::collections::BTreeMap<String, usize>>);
 impl Stats {
     fn record(&self, method: &Method, r: &uvflat_core::Unwrapped) {
         let mut m = self.0.lock().unwrap();
-        *m.entry("cases".into()).or_default() += 1;
+        let n = m.entry("cases".into()).or_default();
+        *n += 1;
+        if *n % 20_000 == 0 {
+            eprintln!("{n} cases");
+        }
         for c in &r.charts {
             *m.entry(format!("{} {}", method.name(), c.status.name())).or_default() += 1;
             if c.status != ChartStatus::Solved {
