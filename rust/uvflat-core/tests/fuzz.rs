@@ -8,7 +8,7 @@
 //!   never `solved` with a flipped triangle;
 //! * each chart's reported flips equal what `metrics::measure` finds on its UVs.
 //!
-//! The default run is bounded (a few hundred cases, well under a minute in release);
+//! The default run is bounded (2,000 cases, a few seconds in release);
 //! `UVFLAT_FUZZ_CASES=100000 cargo test --release -p uvflat-core --test fuzz` runs longer.
 
 use proptest::prelude::*;
@@ -260,7 +260,7 @@ fn run_case(c: &Case, stats: &Stats) -> Result<(), TestCaseError> {
 }
 
 fn cases() -> u32 {
-    std::env::var("UVFLAT_FUZZ_CASES").ok().and_then(|s| s.parse().ok()).unwrap_or(300)
+    std::env::var("UVFLAT_FUZZ_CASES").ok().and_then(|s| s.parse().ok()).unwrap_or(2000)
 }
 
 /// What the cases produced: charts per method and status, and the first words of every
