@@ -78,7 +78,180 @@ def read_off(path):
     face_sizes = np.array([int(t[0]) for t in tokens], dtype=np.int64)
     corner_verts = np.fromiter((int(v) for t, n in zip(tokens, face_sizes) for v in t[1:1 + n]),
                                dtype=np.int64, count=int(face_sizes.sum()))
+    _check_soup(path, positions, corner_verts, face_sizes)
     return positions, corner_verts, face_sizes
+
+
+class MeshFileError(ValueError):
+    """A mesh file holds something no mesh can have (a non-finite coordinate, a face index
+    out of range); the message names the file and the element."""
+
+
+def _check_soup(path, positions, corner_verts, face_sizes):
+    """Raise ``MeshFileError`` for the first non-finite coordinate or out-of-range index."""
+    positions = np.asarray(positions, dtype=np.float64).reshape(-1, 3)
+    bad = np.flatnonzero(~np.isfinite(positions).all(axis=1))
+    if len(bad):
+        v = int(bad[0])
+        raise MeshFileError(f"{path}: vertex {v} has a non-finite coordinate {positions[v].tolist()}")
+    corner_verts = np.asarray(corner_verts, dtype=np.int64)
+    face_sizes = np.asarray(face_sizes, dtype=np.int64)
+    small = np.flatnonzero(face_sizes < 3)
+    if len(small):
+        f = int(small[0])
+        raise MeshFileError(f"{path}: face {f} has {int(face_sizes[f])} corners, at least 3 are needed")
+    out = np.flatnonzero((corner_verts < 0) | (corner_verts >= len(positions)))
+    if len(out):
+        c = int(out[0])
+        f = int(np.searchsorted(np.cumsum(face_sizes), c, side="right"))
+        raise MeshFileError(f"{path}: face {f} refers to vertex {int(corner_verts[c])}, "
+                            f"the file has {len(positions)} vertices")
+
+
+def _obj_soup(path):
+    """Positions and faces of an OBJ file as written (1-based and negative indices resolved),
+    without any of an importer's repairs."""
+    positions, corner_verts, face_sizes = [], [], []
+    with open(path, encoding="utf-8", errors="replace") as fh:
+        for line_no, line in enumerate(fh, 1):
+            parts = line.split()
+            if not parts:
+                continue
+            if parts[0] == "v":
+                try:
+                    positions.append([float(x) for x in parts[1:4]])
+                except ValueError:
+                    raise MeshFileError(f"{path}, line {line_no}: vertex {len(positions)} has a "
+                                        f"coordinate that is not a number: {line.strip()!r}") from None
+                if len(positions[-1]) != 3:
+                    raise MeshFileError(f"{path}, line {line_no}: vertex {len(positions) - 1} has "
+                                        f"{len(positions[-1])} coordinates, 3 are needed")
+            elif parts[0] == "f":
+                face = []
+                for tok in parts[1:]:
+                    try:
+                        i = int(tok.split("/")[0])
+                    except ValueError:
+                        raise MeshFileError(f"{path}, line {line_no}: face {len(face_sizes)} has "
+                                            f"an index that is not an integer: {tok!r}") from None
+                    # 1-based; negative indices count back from the vertices read so far.
+                    face.append(i - 1 if i > 0 else (len(positions) + i if i < 0 else -1))
+                corner_verts += face
+                face_sizes.append(len(face))
+    return np.array(positions, dtype=np.float64).reshape(-1, 3), corner_verts, face_sizes
+
+
+_PLY_TYPES = {"char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short": "i2",
+              "int16": "i2", "ushort": "u2", "uint16": "u2", "int": "i4", "int32": "i4",
+              "uint": "u4", "uint32": "u4", "float": "f4", "float32": "f4", "double": "f8",
+              "float64": "f8"}
+
+
+def _ply_soup(path):
+    """Positions and faces of a PLY file (ascii or binary), as written."""
+    data = Path(path).read_bytes()
+    end = data.find(b"end_header")
+    if not data.startswith(b"ply") or end < 0:
+        raise MeshFileError(f"{path}: not a PLY file")
+    header = data[:end].decode("ascii", errors="replace").splitlines()
+    body = data[data.index(b"\n", end) + 1:]
+    fmt, elements = "ascii", []
+    for line in header:
+        t = line.split()
+        if not t:
+            continue
+        if t[0] == "format":
+            fmt = t[1]
+        elif t[0] == "element":
+            elements.append((t[1], int(t[2]), []))
+        elif t[0] == "property" and elements:
+            elements[-1][2].append(t[1:])
+    positions, corner_verts, face_sizes = np.zeros((0, 3)), [], []
+    if fmt == "ascii":
+        tokens = body.split()
+        at = 0
+        for name, count, props in elements:
+            rows = []
+            for _ in range(count):
+                row = []
+                for prop in props:
+                    if prop[0] == "list":
+                        n = int(tokens[at])
+                        row.append([float(x) for x in tokens[at + 1:at + 1 + n]])
+                        at += 1 + n
+                    else:
+                        row.append(float(tokens[at]))
+                        at += 1
+                rows.append(row)
+            names = [p[-1] for p in props]
+            if name == "vertex":
+                positions = np.array([[r[names.index(k)] for k in "xyz"] for r in rows]).reshape(-1, 3)
+            elif name == "face":
+                k = next(i for i, p in enumerate(props) if p[0] == "list")
+                for r in rows:
+                    corner_verts += [int(x) for x in r[k]]
+                    face_sizes.append(len(r[k]))
+        return positions, corner_verts, face_sizes
+    order = "<" if fmt == "binary_little_endian" else ">"
+    at = 0
+    for name, count, props in elements:
+        if all(p[0] != "list" for p in props):
+            dt = np.dtype([(p[-1], order + _PLY_TYPES[p[0]]) for p in props])
+            arr = np.frombuffer(body, dtype=dt, count=count, offset=at)
+            at += dt.itemsize * count
+            if name == "vertex":
+                positions = np.stack([arr[k].astype(np.float64) for k in "xyz"], axis=1)
+            continue
+        for _ in range(count):
+            for p in props:
+                if p[0] == "list":
+                    ct, it = np.dtype(order + _PLY_TYPES[p[1]]), np.dtype(order + _PLY_TYPES[p[2]])
+                    n = int(np.frombuffer(body, dtype=ct, count=1, offset=at)[0])
+                    at += ct.itemsize
+                    vals = np.frombuffer(body, dtype=it, count=n, offset=at).astype(np.int64)
+                    at += it.itemsize * n
+                    if name == "face":
+                        corner_verts += vals.tolist()
+                        face_sizes.append(n)
+                else:
+                    at += np.dtype(_PLY_TYPES[p[0]]).itemsize
+    return positions, corner_verts, face_sizes
+
+
+def check_mesh_file(path):
+    """Refuse a mesh file whose vertices are not finite or whose faces name missing vertices:
+    importers repair such files silently (a NaN vertex moved to the origin, a bad face
+    dropped), which would unwrap something other than the file. ``.off``, ``.obj`` and
+    ``.ply`` are read as written; ``.blend`` files are checked after loading
+    (``check_mesh_object``). Raises ``MeshFileError`` naming the file and the element."""
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if not path.is_file():
+        raise MeshFileError(f"{path}: no such file")
+    if suffix == ".off":
+        read_off(path)
+    elif suffix == ".obj":
+        _check_soup(path, *_obj_soup(path))
+    elif suffix == ".ply":
+        try:
+            soup = _ply_soup(path)
+        except (ValueError, IndexError, KeyError, StopIteration) as ex:
+            if isinstance(ex, MeshFileError):
+                raise
+            raise MeshFileError(f"{path}: cannot be read as PLY ({ex})") from None
+        _check_soup(path, *soup)
+
+
+def check_mesh_object(path, obj):
+    """Refuse a loaded mesh object with a non-finite vertex position (``MeshFileError``)."""
+    mesh = obj.data
+    co = np.empty(len(mesh.vertices) * 3, dtype=np.float64)
+    mesh.vertices.foreach_get("co", co)
+    bad = np.flatnonzero(~np.isfinite(co.reshape(-1, 3)).all(axis=1))
+    if len(bad):
+        v = int(bad[0])
+        raise MeshFileError(f"{path}: object {obj.name!r}, vertex {v} has a non-finite coordinate "
+                            f"{co.reshape(-1, 3)[v].tolist()}")
 
 
 def link_mesh_object(name, mesh):

@@ -381,10 +381,17 @@ def run_single(args, addon, method_props, pack_props) -> int:
     started = time.perf_counter()
     log(f"loading {source}")
     try:
+        # the file as written: a non-finite vertex or a face naming a missing vertex is an
+        # error naming the element (importers would repair both silently)
+        common.check_mesh_file(source)
         common.load_mesh_object(source)
+        objects = [o for o in bpy.context.scene.objects if o.type == "MESH"]
+        for obj in objects:
+            common.check_mesh_object(source, obj)
+    except common.MeshFileError as ex:
+        return fail(str(ex))
     except (ValueError, RuntimeError, OSError) as ex:
         return fail(f"input {source}: {ex}")
-    objects = [o for o in bpy.context.scene.objects if o.type == "MESH"]
     for obj in objects:
         log(f"loaded '{obj.name}': {len(obj.data.vertices)} vertices, "
             f"{len(obj.data.polygons)} faces")

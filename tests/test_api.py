@@ -1199,3 +1199,56 @@ def test_reason_codes_are_stable():
     pos, cv, fs = cube()
     c = uvflat.unwrap(pos, cv, fs, auto_seams=False).charts[0]
     assert c.status == "failed" and c.reason_code == "failed_closed" and c.reason
+
+
+def test_every_wrong_argument_type_is_a_typed_error():
+    """A value of the wrong type for any argument raises a uvflat error (never a bare
+    TypeError): OptionError for the method and its options, InputError for arrays."""
+    pos, cv, fs = grid(2, 2)
+    for bad in (3, 2.5, b"lscm", ["lscm"], object()):
+        for call in (uvflat.unwrap, uvflat.factorization_seconds):
+            with pytest.raises(uvflat.OptionError) as ei:
+                call(pos, cv, fs, method=bad)
+            assert ei.value.option == "method"
+            assert type(bad).__name__ in str(ei.value)
+    # None is the default method.
+    assert all(c.method == "lscm" for c in uvflat.unwrap(pos, cv, fs, method=None).charts)
+    for bad in (object(), {"a": 1}, "abc", None, 3.5):
+        with pytest.raises(uvflat.InputError):
+            uvflat.unwrap(bad, cv, fs)
+        with pytest.raises(uvflat.InputError):
+            uvflat.unwrap(pos, bad, fs)
+        with pytest.raises(uvflat.InputError):
+            uvflat.metrics(pos, cv, fs, bad)
+    for kw in ("seams", "selected", "fit_to"):
+        with pytest.raises(uvflat.InputError) as ei:
+            uvflat.unwrap(pos, cv, fs, **{kw: object()})
+        assert ei.value.argument == kw
+    with pytest.raises(uvflat.InputError):
+        uvflat.unwrap(pos, cv, fs, pins=object(), pin_uvs=[[0.0, 0.0]])
+    with pytest.raises(uvflat.OptionError) as ei:
+        uvflat.unwrap(pos, cv, fs, method="slim", max_iterations="many")
+    assert ei.value.option == "max_iterations"
+    with pytest.raises(uvflat.OptionError) as ei:
+        uvflat.unwrap(pos, cv, fs, method="slim", tolerance=object())
+    assert ei.value.option == "tolerance"
+
+
+def test_fit_to_ignores_unselected_corners_and_never_collapses_a_mirrored_chart():
+    pos, cv, fs = grid(3, 3)
+    flat = pos[cv][:, :2].astype(float)
+    selected = np.ones(len(fs), dtype=bool)
+    selected[-1] = False
+    prev = flat.copy()
+    prev[-4:] = np.nan  # the corners of the unselected last face
+    r = uvflat.unwrap(pos, cv, fs, selected=selected, fit_to=prev)
+    assert all(c.status == "solved" for c in r.charts)
+    assert np.isfinite(r.uv).all()
+    # Mirrored previous UVs: the island keeps its size (area-scaled) and says so.
+    mirrored = flat * [-1.0, 1.0]
+    r = uvflat.unwrap(pos, cv, fs, fit_to=mirrored)
+    (c,) = r.charts
+    assert c.status == "solved" and c.flips == 0
+    assert "area-scaled" in c.reason
+    width = np.ptp(r.uv[:, 0])
+    assert abs(width - 3.0) < 1e-9, width

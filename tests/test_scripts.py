@@ -289,3 +289,60 @@ def test_batch_options_follow_the_core_contract():
         assert set(by_dest[dest].choices) == declared[dest], dest
     for dest in ("max_iterations", "tolerance_exponent"):
         assert by_dest[dest].default is None, f"--{dest}: the method's own default applies"
+def _one_line_error(r, *needles):
+    """Exit status 1, one line on stderr holding every needle, no traceback."""
+    assert r.returncode == 1, (r.returncode, r.stdout + r.stderr)
+    lines = [ln for ln in r.stderr.splitlines() if ln.strip()]
+    assert len(lines) == 1, r.stderr
+    assert "Traceback" not in r.stderr
+    for n in needles:
+        assert n in lines[0], (n, lines[0])
+
+
+@pytest.mark.parametrize("args,needle", [
+    (["--margin", "nan"], "--margin"),
+    (["--margin", "inf"], "--margin"),
+    (["--margin", "-0.5"], "--margin"),
+    (["--size", "0"], "--size"),
+    (["--max-iterations", "0", "--method", "slim"], "--max-iterations"),
+    (["--tolerance-exponent", "5", "--method", "slim"], "--tolerance-exponent"),
+    (["--max-iterations", "nan", "--method", "slim"], "--max-iterations"),
+])
+def test_batch_unwrap_rejects_bad_arguments_before_writing(tmp_path, args, needle):
+    src, out = tmp_path / "grid.obj", tmp_path / "out.obj"
+    _grid_obj(src)
+    r = _run(src, out, *args)
+    _one_line_error(r, needle)
+    assert list(tmp_path.iterdir()) == [src]
+
+
+@pytest.mark.parametrize("suffix", [".obj", ".off", ".ply"])
+@pytest.mark.parametrize("defect", ["nan_vertex", "bad_index"])
+def test_batch_unwrap_rejects_a_broken_mesh_file_naming_the_element(tmp_path, suffix, defect):
+    positions = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [2, 0, 0]], dtype=float)
+    faces = [[0, 1, 2, 3], [1, 4, 2]]
+    if defect == "nan_vertex":
+        positions[3, 1] = np.nan
+        needle = "vertex 3"
+    else:
+        faces[1][1] = 9
+        needle = "face 1"
+    src, out = tmp_path / f"broken{suffix}", tmp_path / "out.obj"
+    if suffix == ".obj":
+        src.write_text("".join(f"v {x} {y} {z}\n" for x, y, z in positions)
+                       + "".join("f " + " ".join(str(i + 1) for i in f) + "\n" for f in faces))
+    elif suffix == ".off":
+        src.write_text(f"OFF\n{len(positions)} {len(faces)} 0\n"
+                       + "".join(f"{x} {y} {z}\n" for x, y, z in positions)
+                       + "".join(f"{len(f)} " + " ".join(map(str, f)) + "\n" for f in faces))
+    else:
+        header = (f"ply\nformat binary_little_endian 1.0\nelement vertex {len(positions)}\n"
+                  "property float x\nproperty float y\nproperty float z\n"
+                  f"element face {len(faces)}\nproperty list uchar int vertex_indices\nend_header\n")
+        body = positions.astype("<f4").tobytes()
+        for f in faces:
+            body += np.uint8(len(f)).tobytes() + np.array(f, dtype="<i4").tobytes()
+        src.write_bytes(header.encode() + body)
+    r = _run(src, out)
+    _one_line_error(r, str(src), needle)
+    assert not out.exists()

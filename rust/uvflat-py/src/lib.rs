@@ -256,23 +256,33 @@ fn read_auto_seams(
     Ok(o)
 }
 
+/// The `method` argument as a `str` (`None` or absent: `"lscm"`), or an `OptionError` naming its type.
+fn read_method_name(py: Python<'_>, method: Option<&Bound<'_, PyAny>>) -> PyResult<String> {
+    let Some(method) = method.filter(|m| !m.is_none()) else { return Ok("lscm".into()) };
+    method.extract::<String>().map_err(|_| {
+        let ty = method.get_type().name().map(|n| n.to_string()).unwrap_or_else(|_| "?".into());
+        let reason = format!("expected a str, one of {:?}, got a value of type {ty}", method_names());
+        error(py, Kind::Option, format!("option method: {reason}"), attrs![py; "option" => "method", "reason" => reason])
+    })
+}
+
 /// Seconds of one sparse factorization (symbolic analysis + numeric) of each chart's own
 /// linear system for a linear method, summed over the mappable charts; `None` for methods
 /// that are not one linear solve. The yardstick for the linear methods' unwrap time.
 #[pyfunction]
-#[pyo3(signature = (positions, corner_verts, face_sizes, *, method = "lscm", seams = None, selected = None, **options))]
+#[pyo3(signature = (positions, corner_verts, face_sizes, *, method = None, seams = None, selected = None, **options))]
 fn factorization_seconds(
     py: Python<'_>,
     positions: &Bound<'_, PyAny>,
     corner_verts: &Bound<'_, PyAny>,
     face_sizes: &Bound<'_, PyAny>,
-    method: &str,
+    method: Option<&Bound<'_, PyAny>>,
     seams: Option<&Bound<'_, PyAny>>,
     selected: Option<&Bound<'_, PyAny>>,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Option<f64>> {
     let opts = read_options(py, options)?;
-    let method = Method::parse(method, &opts).map_err(|e| map_uv_error(py, e, "fit_to"))?;
+    let method = Method::parse(&read_method_name(py, method)?, &opts).map_err(|e| map_uv_error(py, e, "fit_to"))?;
     let soup = read_soup(positions, corner_verts, face_sizes)?;
     let seams = read_seams(py, seams, soup.positions.len())?;
     let selected = read_selected(selected)?;
@@ -285,7 +295,7 @@ fn factorization_seconds(
 ///
 /// See the package documentation (`uvflat.unwrap`) for the arguments.
 #[pyfunction]
-#[pyo3(signature = (positions, corner_verts, face_sizes, *, method = "lscm", seams = None, selected = None,
+#[pyo3(signature = (positions, corner_verts, face_sizes, *, method = None, seams = None, selected = None,
                     pins = None, pin_uvs = None, fit_to = None, auto_seams = None, max_stretch = None,
                     max_cones = None, avoid_vertices = None, sharp_angle = None, progress = None,
                     **options))]
@@ -295,7 +305,7 @@ fn unwrap(
     positions: &Bound<'_, PyAny>,
     corner_verts: &Bound<'_, PyAny>,
     face_sizes: &Bound<'_, PyAny>,
-    method: &str,
+    method: Option<&Bound<'_, PyAny>>,
     seams: Option<&Bound<'_, PyAny>>,
     selected: Option<&Bound<'_, PyAny>>,
     pins: Option<&Bound<'_, PyAny>>,
@@ -310,7 +320,7 @@ fn unwrap(
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PyUnwrapResult> {
     let opts = read_options(py, options)?;
-    let method = Method::parse(method, &opts).map_err(|e| map_uv_error(py, e, "fit_to"))?;
+    let method = Method::parse(&read_method_name(py, method)?, &opts).map_err(|e| map_uv_error(py, e, "fit_to"))?;
     let soup = read_soup(positions, corner_verts, face_sizes)?;
     let n_vertices = soup.positions.len();
     let n_corners = soup.corner_verts.len();

@@ -205,7 +205,9 @@ pub fn add_virtual_band(ext: &mut Extended) {
 }
 
 /// UV of every outer-loop vertex on the boundary shape, spaced by 3D arc length,
-/// counter-clockwise (the chart is left of the loop, so triangles come out positive).
+/// counter-clockwise (the chart is left of the loop, so triangles come out positive). Every
+/// gap is at least 1/1000 of the uniform spacing, so coincident 3D boundary vertices still get
+/// distinct points.
 pub fn boundary_positions(positions: &[[f64; 3]], outer: &[u32], shape: BoundaryShape) -> Vec<[f64; 2]> {
     let n = outer.len();
     let mut s = Vec::with_capacity(n);

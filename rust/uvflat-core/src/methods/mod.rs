@@ -382,9 +382,10 @@ fn dispatch(method: &Method, chart: &Chart, pins: &[(u32, [f64; 2])]) -> std::re
     }
 }
 
-/// What is wrong with a method's UVs, if anything: a non-finite UV, or a flipped triangle
-/// ([`crate::metrics::flipped_triangles`]) from a method that promises none.
-fn defect(chart: &Chart, uv: &[[f64; 2]], promise: bool) -> Option<String> {
+/// What is wrong with a method's UVs, if anything: a non-finite UV, a flipped triangle
+/// ([`crate::metrics::flipped_triangles`]) from a method that promises none, or a boundary
+/// crossing itself from a method that promises no overlap (scaffold).
+fn defect(chart: &Chart, uv: &[[f64; 2]], promise: bool, no_overlap: bool) -> Option<String> {
     if let Some(i) = uv.iter().position(|p| !p[0].is_finite() || !p[1].is_finite()) {
         return Some(format!("the solve produced a non-finite UV at mesh vertex {}", chart.mesh_vertex[i]));
     }
@@ -392,6 +393,9 @@ fn defect(chart: &Chart, uv: &[[f64; 2]], promise: bool) -> Option<String> {
         let flips = crate::metrics::count_flips(&chart.triangles, uv);
         if flips > 0 {
             return Some(format!("the map has {flips} flipped or zero-area triangle(s) (degenerate 3D triangles?)"));
+        }
+        if no_overlap && crate::metrics::boundary_self_overlap(uv, &chart.boundary_loops) {
+            return Some("the map's boundary crosses itself".into());
         }
     }
     None
@@ -409,18 +413,22 @@ fn defect(chart: &Chart, uv: &[[f64; 2]], promise: bool) -> Option<String> {
 /// system stays finite; the result is then checked rather than trusted.
 ///
 /// Validity: a result with a non-finite UV, or with a flipped triangle from a method that
-/// promises none on an unpinned chart ([`Method::promises_no_flips`]), is never returned as
-/// solved: the chart falls back to LSCM (methods without a promise; only for a non-finite
-/// result) and then to Tutte's uniform-weight map onto the circle, which depends on the
-/// connectivity alone and cannot flip a triangle of a disk; the fallback's reason says why.
-/// When no candidate gives finite UVs the chart fails with the reason.
+/// promises none on an unpinned chart ([`Method::promises_no_flips`]), or with a boundary
+/// crossing itself from scaffold (on an unpinned chart), is never returned as solved: the
+/// chart falls back to LSCM (methods without a promise; only for a non-finite result) and then
+/// to Tutte's uniform-weight map onto the circle, which depends on the connectivity alone and
+/// does not flip a triangle of a disk (Tutte's theorem; boundary points kept apart, see
+/// [`fixed_boundary::boundary_positions`]); the fallback's reason says why, and says so when
+/// the fallback still has flips. When no candidate gives finite UVs the chart fails with the
+/// reason.
 pub fn solve(method: &Method, chart: &Chart, pins: &[(u32, [f64; 2])]) -> std::result::Result<ChartSolution, ChartFailure> {
     require_disk(chart)?;
     let (unit, unit_pins, size) = unit_chart(chart, pins);
     let promise = pins.is_empty() && method.promises_no_flips(chart.kind);
     let mut sol = dispatch(method, &unit, &unit_pins)?;
     // A method that already fell back has said why; only its finiteness is checked.
-    if let Some(why) = defect(&unit, &sol.uv, promise && sol.fallback.is_none()) {
+    let no_overlap = matches!(method, Method::Scaffold(_));
+    if let Some(why) = defect(&unit, &sol.uv, promise && sol.fallback.is_none(), no_overlap) {
         let tutte = Method::Tutte { boundary: BoundaryShape::Circle };
         let mut candidates: Vec<Method> = Vec::new();
         if !promise && !matches!(method, Method::Lscm) {
@@ -433,7 +441,7 @@ pub fn solve(method: &Method, chart: &Chart, pins: &[(u32, [f64; 2])]) -> std::r
         let mut found = None;
         for m in candidates {
             match dispatch(&m, &unit, &unit_pins) {
-                Ok(s) => match defect(&unit, &s.uv, false) {
+                Ok(s) => match defect(&unit, &s.uv, false, false) {
                     None => {
                         found = Some((m.name(), s));
                         break;

@@ -121,6 +121,19 @@ pub fn flipped_triangles(triangles: &[[u32; 3]], uv: &[[f64; 2]]) -> Vec<bool> {
     areas.iter().map(|&a| !(a * majority > eps)).collect()
 }
 
+/// Whether one UV triangle is a sliver at round-off level of its own edges (|sin| of its
+/// angle at the first corner ≤ 1e-12). A shape test for a single triangle, kept for callers
+/// that look at one triangle alone; flips are counted by [`flipped_triangles`], the one
+/// definition, which also sees the chart's scale and majority orientation.
+#[inline]
+pub fn uv_degenerate(q: [[f64; 2]; 3]) -> bool {
+    let e1 = [q[1][0] - q[0][0], q[1][1] - q[0][1]];
+    let e2 = [q[2][0] - q[0][0], q[2][1] - q[0][1]];
+    let c = cross2(e1, e2).abs();
+    let l = (e1[0].hypot(e1[1])) * (e2[0].hypot(e2[1]));
+    c <= 1e-12 * l || l == 0.0
+}
+
 /// Number of [`flipped_triangles`].
 pub fn count_flips(triangles: &[[u32; 3]], uv: &[[f64; 2]]) -> usize {
     flipped_triangles(triangles, uv).iter().filter(|&&f| f).count()
