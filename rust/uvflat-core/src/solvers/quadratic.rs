@@ -85,14 +85,14 @@ pub enum Symmetry {
 enum Symbolic<T> {
     /// Cholesky with our fill-reducing ordering (see [`super::ordering`]); the factor's values
     /// and the factorization/solve scratch are allocated once and reused by every refactor.
-    Llt { symbolic: SymbolicCholesky<usize>, l_values: Vec<T>, mem: std::cell::RefCell<MemBuffer> },
+    Llt { symbolic: Box<SymbolicCholesky<usize>>, l_values: Vec<T>, mem: std::cell::RefCell<MemBuffer> },
     Lu(SymbolicLu<usize>),
 }
 
 enum Factor<T> {
     /// The values of the last successful Cholesky factorization are in `Symbolic::Llt`.
     Llt,
-    Lu(Lu<usize, T>),
+    Lu(Box<Lu<usize, T>>),
 }
 
 /// Where an input triplet goes.
@@ -180,7 +180,7 @@ impl<T: Scalar> FixedValueSolver<T> {
                     .or(symbolic.solve_in_place_scratch::<T>(2, par));
                 let mem = MemBuffer::try_new(req).map_err(|e| other(&e))?;
                 let l_values = vec![T::zero_value(); symbolic.len_val()];
-                Symbolic::Llt { symbolic, l_values, mem: std::cell::RefCell::new(mem) }
+                Symbolic::Llt { symbolic: Box::new(symbolic), l_values, mem: std::cell::RefCell::new(mem) }
             }
             Symmetry::General => {
                 Symbolic::Lu(SymbolicLu::try_new(ff_symbolic.as_ref()).map_err(|e| SolveError::Other(format!("{e:?}")))?)
@@ -230,10 +230,10 @@ impl<T: Scalar> FixedValueSolver<T> {
                     .map_err(|_| SolveError::NotPositiveDefinite)?;
                 Factor::Llt
             }
-            Symbolic::Lu(sym) => Factor::Lu(Lu::try_new_with_symbolic(sym.clone(), mat.as_ref()).map_err(|e| match e {
+            Symbolic::Lu(sym) => Factor::Lu(Box::new(Lu::try_new_with_symbolic(sym.clone(), mat.as_ref()).map_err(|e| match e {
                 faer::sparse::linalg::LuError::SymbolicSingular { .. } => SolveError::Singular,
                 other => SolveError::Other(format!("{other:?}")),
-            })?),
+            })?)),
         });
         Ok(())
     }
