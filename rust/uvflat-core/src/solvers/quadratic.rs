@@ -21,7 +21,7 @@ use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::solvers::Solve;
 use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, LltRef, SymbolicCholesky, SymmetricOrdering};
 use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
-use faer::sparse::{Pair, SparseColMat, SymbolicSparseColMat};
+use faer::sparse::{Pair, SparseColMatRef, SymbolicSparseColMat};
 use faer::{Mat, Side};
 
 use super::ordering::{fill_reducing, OrderingKind};
@@ -37,6 +37,7 @@ pub trait Scalar:
     + std::fmt::Debug
     + std::ops::Mul<Output = Self>
     + std::ops::SubAssign
+    + std::ops::AddAssign
     + 'static
 {
     /// Additive identity.
@@ -98,7 +99,8 @@ enum Factor<T> {
 /// Where an input triplet goes.
 #[derive(Clone, Copy)]
 enum Slot {
-    /// Entry of `Q_FF` (index into the value list of the pattern).
+    /// Entry of `Q_FF`: position in the compressed-column value array of its pattern
+    /// (duplicates share a position and are summed).
     FreeFree(u32),
     /// Entry of `Q_FC`: (free row, fixed column position).
     FreeFixed(u32, u32),
@@ -116,7 +118,7 @@ pub struct FixedValueSolver<T: Scalar = f64> {
     fixed: Vec<u32>,
     slots: Vec<Slot>,
     ff_symbolic: SymbolicSparseColMat<usize>,
-    ff_argsort: faer::sparse::Argsort<usize>,
+    /// Values of `Q_FF` in the order of `ff_symbolic`, rewritten in place by every refactor.
     ff_values: Vec<T>,
     coupling: Vec<(u32, u32, T)>,
     symbolic: Symbolic<T>,
@@ -164,8 +166,21 @@ impl<T: Scalar> FixedValueSolver<T> {
             slots.push(slot);
         }
         let nf = free.len();
-        let (ff_symbolic, ff_argsort) = SymbolicSparseColMat::try_new_from_indices(nf, nf, &pairs)
+        let (ff_symbolic, _) = SymbolicSparseColMat::try_new_from_indices(nf, nf, &pairs)
             .map_err(|e| SolveError::Other(format!("{e:?}")))?;
+        // Point every Q_FF slot at its entry of the compressed columns (rows sorted, unique).
+        {
+            let (col_ptr, row_idx) = (ff_symbolic.col_ptr(), ff_symbolic.row_idx());
+            for slot in slots.iter_mut() {
+                if let Slot::FreeFree(k) = slot {
+                    let Pair { row, col } = pairs[*k as usize];
+                    let column = &row_idx[col_ptr[col]..col_ptr[col + 1]];
+                    let at = column.binary_search(&row).map_err(|_| SolveError::Other("pattern entry not found".into()))?;
+                    *k = (col_ptr[col] + at) as u32;
+                }
+            }
+        }
+        let nnz_ff = ff_symbolic.row_idx().len();
         let symbolic = match symmetry {
             Symmetry::Symmetric => {
                 let other = |e: &dyn std::fmt::Debug| SolveError::Other(format!("{e:?}"));
@@ -193,8 +208,7 @@ impl<T: Scalar> FixedValueSolver<T> {
             fixed: fixed.to_vec(),
             slots,
             ff_symbolic,
-            ff_argsort,
-            ff_values: vec![T::zero_value(); pairs.len()],
+            ff_values: vec![T::zero_value(); nnz_ff],
             coupling: Vec::new(),
             symbolic,
             factor: None,
@@ -210,27 +224,27 @@ impl<T: Scalar> FixedValueSolver<T> {
     pub fn refactor(&mut self, values: &[T]) -> Result<(), SolveError> {
         assert_eq!(values.len(), self.slots.len(), "refactor needs one value per original triplet");
         self.coupling.clear();
+        self.ff_values.fill(T::zero_value());
         for (slot, &v) in self.slots.iter().zip(values) {
             match *slot {
-                Slot::FreeFree(k) => self.ff_values[k as usize] = v,
+                Slot::FreeFree(k) => self.ff_values[k as usize] += v,
                 Slot::FreeFixed(r, c) => self.coupling.push((r, c, v)),
                 Slot::FreeFixedConj(r, c) => self.coupling.push((r, c, v.conjugate())),
                 Slot::Unused => {}
             }
         }
-        let mat = SparseColMat::new_from_argsort(self.ff_symbolic.clone(), &self.ff_argsort, &self.ff_values)
-            .map_err(|e| SolveError::Other(format!("{e:?}")))?;
+        let mat = SparseColMatRef::new(self.ff_symbolic.as_ref(), &self.ff_values);
         self.factor = None;
         self.factor = Some(match &mut self.symbolic {
             Symbolic::Llt { symbolic, l_values, mem } => {
                 let par = faer::get_global_parallelism();
                 let mut mem = mem.borrow_mut();
                 symbolic
-                    .factorize_numeric_llt(l_values, mat.as_ref(), Side::Lower, Default::default(), par, MemStack::new(&mut mem), Default::default())
+                    .factorize_numeric_llt(l_values, mat, Side::Lower, Default::default(), par, MemStack::new(&mut mem), Default::default())
                     .map_err(|_| SolveError::NotPositiveDefinite)?;
                 Factor::Llt
             }
-            Symbolic::Lu(sym) => Factor::Lu(Box::new(Lu::try_new_with_symbolic(sym.clone(), mat.as_ref()).map_err(|e| match e {
+            Symbolic::Lu(sym) => Factor::Lu(Box::new(Lu::try_new_with_symbolic(sym.clone(), mat).map_err(|e| match e {
                 faer::sparse::linalg::LuError::SymbolicSingular { .. } => SolveError::Singular,
                 other => SolveError::Other(format!("{other:?}")),
             })?)),
