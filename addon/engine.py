@@ -65,6 +65,9 @@ class Summary:
     fallback: list[ChartProblem] = field(default_factory=list)
     packed: bool = False
     results: dict = field(default_factory=dict)  # object name -> uvflat.UnwrapResult
+    # Seconds per phase of the last run (for benchmarks): "read", "solve", "write", "pack"
+    # (Blender's packer alone) and "mode" (edit/object mode switches and selection changes).
+    phases: dict = field(default_factory=dict)
 
     def line(self) -> str:
         text = (f"uvflat {self.method}: {self.charts} chart{'s' * (self.charts != 1)}, "
@@ -209,7 +212,7 @@ def _restore(jobs):
             job.selection = None
 
 
-def _pack(context, jobs, in_mode, active, margin, shape) -> bool:
+def _pack(context, jobs, in_mode, active, margin, shape, phases=None) -> bool:
     """Pack the islands of the solved, unpinned charts with Blender's packer.
 
     Returns True when the objects were left in edit mode (the selection did not have to be
@@ -232,7 +235,10 @@ def _pack(context, jobs, in_mode, active, margin, shape) -> bool:
     try:
         _enter_edit_mode(context.view_layer, in_mode, active)
         tool_settings.use_uv_select_sync = True  # pack by mesh face selection
+        t0 = time.perf_counter()
         result = bpy.ops.uv.pack_islands(margin=margin, shape_method=shape)
+        if phases is not None:
+            phases["pack"] = phases.get("pack", 0.0) + time.perf_counter() - t0
     finally:
         tool_settings.use_uv_select_sync = sync
         if change:
@@ -264,14 +270,22 @@ def unwrap_edit_objects(context, method, options, *, pack=True, margin=0.001,
         raise UnwrapError("no mesh object in edit mode")
     active = context.active_object if context.active_object in in_mode else in_mode[0]
     summary = Summary(method=method)
+    phases = summary.phases
     jobs: list[_Job] = []
 
+    def lap(name, t0):
+        phases[name] = phases.get(name, 0.0) + time.perf_counter() - t0
+
+    t_mode = time.perf_counter()
     _leave_edit_mode(in_mode)
+    lap("mode", t_mode)
     in_edit = False
     try:
         # 2. read and solve everything before writing anything
         for obj in objects:
+            t0 = time.perf_counter()
             job = _read(obj)
+            lap("read", t0)
             if not job.selected.any():
                 continue
             t0 = time.perf_counter()
@@ -279,18 +293,25 @@ def unwrap_edit_objects(context, method, options, *, pack=True, margin=0.001,
                 _solve(core, job, method, options, use_fit=not pack)
             except core.UvflatError as ex:
                 raise UnwrapError(f"{obj.name}: {ex}") from ex
-            summary.solve_seconds += time.perf_counter() - t0
+            dt = time.perf_counter() - t0
+            summary.solve_seconds += dt
+            phases["solve"] = phases.get("solve", 0.0) + dt
             jobs.append(job)
         if not jobs:
             raise UnwrapError("no faces selected")
 
         try:
             # 3. write
+            t0 = time.perf_counter()
             for job in jobs:
                 _write(job)
+            lap("write", t0)
             # 4. pack the new islands only
             if pack:
-                in_edit = _pack(context, jobs, in_mode, active, margin, pack_shape)
+                t0 = time.perf_counter()
+                in_edit = _pack(context, jobs, in_mode, active, margin, pack_shape, phases)
+                # the rest of _pack switches modes and selections
+                phases["mode"] = phases.get("mode", 0.0) + time.perf_counter() - t0 - phases.get("pack", 0.0)
                 summary.packed = True
         except BaseException:
             _leave_edit_mode(in_mode)
@@ -299,7 +320,9 @@ def unwrap_edit_objects(context, method, options, *, pack=True, margin=0.001,
             raise
     finally:
         if not in_edit:
+            t_mode = time.perf_counter()
             _enter_edit_mode(view_layer, in_mode, active)
+            lap("mode", t_mode)
 
     for job in jobs:
         summary.results[job.obj.name] = job.result

@@ -723,3 +723,18 @@ def test_abf_quality_on_charts_with_holes(ext, scene, mesh):
     """Charts with holes (Blender fills holes before unwrapping): ABF no worse than
     ANGLE_BASED and flip-free."""
     _compare_with_blender(ext, shared_mesh(mesh), "abf", "ANGLE_BASED", "conformal")
+
+
+@pytest.mark.parametrize("pack", [True, False], ids=["pack", "no_pack"])
+def test_phase_timings_cover_the_run(ext, scene, pack):
+    """The summary's phase timings name every phase once, are non-negative and add up to at
+    most the whole run (they are disjoint parts of it); the solve phase is the core's time."""
+    obj = suzanne()
+    result, summary = unwrap(ext, [obj], method="lscm", pack=pack)
+    assert result == {"FINISHED"}
+    phases = summary.phases
+    expected = {"read", "solve", "write", "mode"} | ({"pack"} if pack else set())
+    assert set(phases) == expected, phases
+    assert all(t >= 0.0 for t in phases.values()), phases
+    assert sum(phases.values()) <= summary.seconds + 1e-6, (phases, summary.seconds)
+    assert phases["solve"] == pytest.approx(summary.solve_seconds, rel=1e-9, abs=1e-12)
