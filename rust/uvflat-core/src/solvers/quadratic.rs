@@ -99,8 +99,7 @@ enum Factor<T> {
 /// Where an input triplet goes.
 #[derive(Clone, Copy)]
 enum Slot {
-    /// Entry of `Q_FF`: position in the compressed-column value array of its pattern
-    /// (duplicates share a position and are summed).
+    /// Entry of `Q_FF` (index into the list of its entries, duplicates included).
     FreeFree(u32),
     /// Entry of `Q_FC`: (free row, fixed column position).
     FreeFixed(u32, u32),
@@ -108,6 +107,40 @@ enum Slot {
     FreeFixedConj(u32, u32),
     /// Row of a fixed unknown, or upper triangle of a symmetric matrix: unused.
     Unused,
+}
+
+/// Top bit of a [`FixedValueSolver`] `sum_order` entry: a duplicate of the previous entry.
+const DUPLICATE: u32 = 1 << 31;
+
+/// The entries `pairs` in compressed-column order (by column, then row), duplicates flagged
+/// with [`DUPLICATE`]; ties ordered exactly as faer's `try_new_from_indices` orders them
+/// (bucket by column in input order, then the same unstable sort by (row, col)), so values
+/// are summed in the same order as faer's own assembly would.
+fn compressed_order(ncols: usize, pairs: &[Pair<usize, usize>]) -> Vec<u32> {
+    let mut start = vec![0usize; ncols + 1];
+    for p in pairs {
+        start[p.col + 1] += 1;
+    }
+    for c in 0..ncols {
+        start[c + 1] += start[c];
+    }
+    let mut next = start.clone();
+    let mut order = vec![0usize; pairs.len()];
+    for (i, p) in pairs.iter().enumerate() {
+        order[next[p.col]] = i;
+        next[p.col] += 1;
+    }
+    for w in start.windows(2) {
+        order[w[0]..w[1]].sort_unstable_by_key(|&i| (pairs[i].row, pairs[i].col));
+    }
+    let mut out = Vec::with_capacity(order.len());
+    let mut prev = (usize::MAX, usize::MAX);
+    for &i in &order {
+        let key = (pairs[i].row, pairs[i].col);
+        out.push(i as u32 | if key == prev { DUPLICATE } else { 0 });
+        prev = key;
+    }
+    out
 }
 
 /// The quadratic-with-fixed-values solver (see the module docs).
@@ -118,6 +151,11 @@ pub struct FixedValueSolver<T: Scalar = f64> {
     fixed: Vec<u32>,
     slots: Vec<Slot>,
     ff_symbolic: SymbolicSparseColMat<usize>,
+    /// Values of the entries of `Q_FF` in input order (duplicates included).
+    pair_values: Vec<T>,
+    /// Entries in compressed-column order; the top bit marks a duplicate of the previous one
+    /// (summed into it, in this order: the order faer itself sums duplicates in).
+    sum_order: Vec<u32>,
     /// Values of `Q_FF` in the order of `ff_symbolic`, rewritten in place by every refactor.
     ff_values: Vec<T>,
     coupling: Vec<(u32, u32, T)>,
@@ -168,18 +206,10 @@ impl<T: Scalar> FixedValueSolver<T> {
         let nf = free.len();
         let (ff_symbolic, _) = SymbolicSparseColMat::try_new_from_indices(nf, nf, &pairs)
             .map_err(|e| SolveError::Other(format!("{e:?}")))?;
-        // Point every Q_FF slot at its entry of the compressed columns (rows sorted, unique).
-        {
-            let (col_ptr, row_idx) = (ff_symbolic.col_ptr(), ff_symbolic.row_idx());
-            for slot in slots.iter_mut() {
-                if let Slot::FreeFree(k) = slot {
-                    let Pair { row, col } = pairs[*k as usize];
-                    let column = &row_idx[col_ptr[col]..col_ptr[col + 1]];
-                    let at = column.binary_search(&row).map_err(|_| SolveError::Other("pattern entry not found".into()))?;
-                    *k = (col_ptr[col] + at) as u32;
-                }
-            }
+        if pairs.len() >= DUPLICATE as usize {
+            return Err(SolveError::Other(format!("{} matrix entries exceed the solver's 2³¹ limit", pairs.len())));
         }
+        let sum_order = compressed_order(nf, &pairs);
         let nnz_ff = ff_symbolic.row_idx().len();
         let symbolic = match symmetry {
             Symmetry::Symmetric => {
@@ -208,6 +238,8 @@ impl<T: Scalar> FixedValueSolver<T> {
             fixed: fixed.to_vec(),
             slots,
             ff_symbolic,
+            pair_values: vec![T::zero_value(); pairs.len()],
+            sum_order,
             ff_values: vec![T::zero_value(); nnz_ff],
             coupling: Vec::new(),
             symbolic,
@@ -224,13 +256,22 @@ impl<T: Scalar> FixedValueSolver<T> {
     pub fn refactor(&mut self, values: &[T]) -> Result<(), SolveError> {
         assert_eq!(values.len(), self.slots.len(), "refactor needs one value per original triplet");
         self.coupling.clear();
-        self.ff_values.fill(T::zero_value());
         for (slot, &v) in self.slots.iter().zip(values) {
             match *slot {
-                Slot::FreeFree(k) => self.ff_values[k as usize] += v,
+                Slot::FreeFree(k) => self.pair_values[k as usize] = v,
                 Slot::FreeFixed(r, c) => self.coupling.push((r, c, v)),
                 Slot::FreeFixedConj(r, c) => self.coupling.push((r, c, v.conjugate())),
                 Slot::Unused => {}
+            }
+        }
+        let mut at = usize::MAX;
+        for &e in &self.sum_order {
+            let v = self.pair_values[(e & !DUPLICATE) as usize];
+            if e & DUPLICATE != 0 {
+                self.ff_values[at] += v;
+            } else {
+                at = at.wrapping_add(1);
+                self.ff_values[at] = v;
             }
         }
         let mat = SparseColMatRef::new(self.ff_symbolic.as_ref(), &self.ff_values);
