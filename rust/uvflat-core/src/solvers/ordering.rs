@@ -71,6 +71,10 @@ impl Permutation {
 /// Compute a fill-reducing ordering of the `n × n` symmetric pattern given in compressed
 /// column form (`col_ptr`, `row_idx`; either triangle or both, unsorted allowed).
 pub fn fill_reducing(kind: OrderingKind, n: usize, col_ptr: &[usize], row_idx: &[usize]) -> Result<Permutation, FaerError> {
+    if n <= 2 {
+        // No ordering can change the fill of a 1×1 or 2×2 factor (one-triangle charts).
+        return Ok(Permutation::from_fwd((0..n).collect()));
+    }
     let graph = Graph::from_pattern(n, col_ptr, row_idx);
     match kind.resolve(n) {
         OrderingKind::NestedDissection => {
