@@ -85,8 +85,10 @@ pub enum Symmetry {
 
 enum Symbolic<T> {
     /// Cholesky with our fill-reducing ordering (see [`super::ordering`]); the factor's values
-    /// and the factorization/solve scratch are allocated once and reused by every refactor.
-    Llt { symbolic: Box<SymbolicCholesky<usize>>, l_values: Vec<T>, mem: std::cell::RefCell<MemBuffer> },
+    /// and the factorization/solve scratch are allocated once and reused by every refactor
+    /// (the scratch behind a mutex, so that `solve(&self)` can use it and the solver stays
+    /// `Sync`).
+    Llt { symbolic: Box<SymbolicCholesky<usize>>, l_values: Vec<T>, mem: std::sync::Mutex<MemBuffer> },
     Lu(SymbolicLu<usize>),
 }
 
@@ -225,7 +227,7 @@ impl<T: Scalar> FixedValueSolver<T> {
                     .or(symbolic.solve_in_place_scratch::<T>(2, par));
                 let mem = MemBuffer::try_new(req).map_err(|e| other(&e))?;
                 let l_values = vec![T::zero_value(); symbolic.len_val()];
-                Symbolic::Llt { symbolic: Box::new(symbolic), l_values, mem: std::cell::RefCell::new(mem) }
+                Symbolic::Llt { symbolic: Box::new(symbolic), l_values, mem: std::sync::Mutex::new(mem) }
             }
             Symmetry::General => {
                 Symbolic::Lu(SymbolicLu::try_new(ff_symbolic.as_ref()).map_err(|e| SolveError::Other(format!("{e:?}")))?)
@@ -279,7 +281,7 @@ impl<T: Scalar> FixedValueSolver<T> {
         self.factor = Some(match &mut self.symbolic {
             Symbolic::Llt { symbolic, l_values, mem } => {
                 let par = faer::get_global_parallelism();
-                let mut mem = mem.borrow_mut();
+                let mut mem = mem.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
                 symbolic
                     .factorize_numeric_llt(l_values, mat, Side::Lower, Default::default(), par, MemStack::new(&mut mem), Default::default())
                     .map_err(|_| SolveError::NotPositiveDefinite)?;
@@ -330,7 +332,7 @@ impl<T: Scalar> FixedValueSolver<T> {
         match (&self.factor, &self.symbolic) {
             (Some(Factor::Llt), Symbolic::Llt { symbolic, l_values, mem }) => {
                 let par = faer::get_global_parallelism();
-                let mut mem = mem.borrow_mut();
+                let mut mem = mem.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
                 if k > 2 {
                     // More columns than the scratch was sized for (never in practice).
                     let req = symbolic.solve_in_place_scratch::<T>(k, par);
@@ -439,5 +441,12 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn the_solver_can_be_shared_across_threads() {
+        fn assert_send_sync<S: Send + Sync>() {}
+        assert_send_sync::<FixedValueSolver<f64>>();
+        assert_send_sync::<FixedValueSolver<faer::c64>>();
     }
 }
