@@ -74,6 +74,9 @@ class Summary:
     seams_marked: bool = False
     non_manifold_edges: int = 0  # edges of 3+ selected faces, treated as seams
     results: dict = field(default_factory=dict)  # object name -> uvflat.UnwrapResult
+    # Seconds per phase of the last run (for benchmarks): "read", "solve", "write", "pack"
+    # (Blender's packer alone) and "mode" (edit/object mode switches and selection changes).
+    phases: dict = field(default_factory=dict)
 
     @property
     def needs_attention(self) -> bool:
@@ -371,7 +374,7 @@ def _locked_faces(job: _Job, packed):
     return ~packed & ~mesh_io.read_hidden_faces(job.obj.data)
 
 
-def _pack(context, jobs, in_mode, active, settings: PackSettings, only=None) -> bool:
+def _pack(context, jobs, in_mode, active, settings: PackSettings, only=None, phases=None) -> bool:
     """Pack the islands of the solved, unpinned charts with Blender's packer (of the jobs in
     ``only``, default all), around the locked islands when ``settings.mode == "AROUND"``.
 
@@ -409,10 +412,13 @@ def _pack(context, jobs, in_mode, active, settings: PackSettings, only=None) -> 
     try:
         _enter_edit_mode(context.view_layer, in_mode, active)
         tool_settings.use_uv_select_sync = True  # pack by mesh face selection
+        t0 = time.perf_counter()
         result = bpy.ops.uv.pack_islands(
             margin=settings.margin, margin_method=settings.margin_method,
             shape_method=settings.shape_method, rotate=settings.rotate,
             pin=around, pin_method="LOCKED")
+        if phases is not None:
+            phases["pack"] = phases.get("pack", 0.0) + time.perf_counter() - t0
     finally:
         tool_settings.use_uv_select_sync = sync
         if change:
@@ -482,7 +488,11 @@ class Run:
             raise UnwrapError("no mesh object in edit mode")
         self.active = (context.active_object if context.active_object in self.in_mode
                        else self.in_mode[0])
+        phases = self.summary.phases
+        t0 = time.perf_counter()
         _leave_edit_mode(self.in_mode)
+        _lap(phases, "mode", t0)
+        t0 = time.perf_counter()
         try:
             avoid = {}
             if self.avoid_group and self.options.get("auto_seams", True):
@@ -500,8 +510,11 @@ class Run:
         except BaseException:
             _enter_edit_mode(self.view_layer, self.in_mode, self.active)
             raise
+        _lap(phases, "read", t0)
         if not stay_out:
+            t0 = time.perf_counter()
             _enter_edit_mode(self.view_layer, self.in_mode, self.active)
+            _lap(phases, "mode", t0)
         self.progress = (0, len(self.jobs), 0, 0)
         return self
 
@@ -526,7 +539,9 @@ class Run:
         if self.cancel_requested.is_set() or self.cancelled:
             raise UnwrapError("cancelled")
         if in_edit:
+            t0 = time.perf_counter()
             _leave_edit_mode(self.in_mode)
+            _lap(self.summary.phases, "mode", t0)
         return _write_and_pack(context, self)
 
     def abort(self, context):
@@ -562,6 +577,7 @@ class Run:
             except core.UvflatError as ex:
                 raise UnwrapError(f"{job.obj.name}: {ex}") from ex
             self.summary.solve_seconds += time.perf_counter() - t0
+            self.summary.phases["solve"] = self.summary.solve_seconds
             self.progress = (k + 1, len(self.jobs), 0, 0)
 
     def _solve_catching(self):
@@ -571,14 +587,21 @@ class Run:
             self.error = ex
 
 
+def _lap(phases, name, t0):
+    """Add the seconds since ``t0`` to phase ``name``."""
+    phases[name] = phases.get(name, 0.0) + time.perf_counter() - t0
+
+
 def _write_and_pack(context, run: Run) -> Summary:
     """Steps 3 to 5 of the module docstring, from object mode; restores everything on error."""
     jobs, pack, summary = run.jobs, run.pack, run.summary
+    phases = summary.phases
     packing = pack.mode != "OFF"
     in_edit = False
     try:
         try:
             # 3. write (UVs, then the seams automatic seams cut)
+            t0 = time.perf_counter()
             for job in jobs:
                 _write(job, run._core)
                 if run.mark_seams:
@@ -586,6 +609,7 @@ def _write_and_pack(context, run: Run) -> Summary:
                 else:
                     summary.seams_added += len(getattr(job.result, "new_seams", ()))
             summary.seams_marked = bool(run.mark_seams and summary.seams_added)
+            _lap(phases, "write", t0)
             # 4. pack the new islands only. With packing off, islands without previous UVs
             # to keep them near (all area-scaled around the origin) are packed anyway, so
             # that they land inside the 0-1 tile without overlapping each other.
@@ -593,7 +617,10 @@ def _write_and_pack(context, run: Run) -> Summary:
             if only is None or only:
                 settings = pack if packing else PackSettings(
                     "AROUND", pack.margin, pack.margin_method, pack.shape_method, pack.rotate)
-                in_edit = _pack(context, jobs, run.in_mode, run.active, settings, only)
+                t0, packer = time.perf_counter(), phases.get("pack", 0.0)
+                in_edit = _pack(context, jobs, run.in_mode, run.active, settings, only, phases)
+                # the packer itself is "pack"; the selection and mode changes around it "mode"
+                _lap(phases, "mode", t0 + (phases.get("pack", 0.0) - packer))
                 summary.packed = packing
         except BaseException:
             _leave_edit_mode(run.in_mode)
@@ -602,7 +629,9 @@ def _write_and_pack(context, run: Run) -> Summary:
             raise
     finally:
         if not in_edit:
+            t0 = time.perf_counter()
             _enter_edit_mode(run.view_layer, run.in_mode, run.active)
+            _lap(phases, "mode", t0)
 
     for job in jobs:
         summary.results[job.obj.name] = job.result

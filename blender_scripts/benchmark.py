@@ -2,7 +2,7 @@
 """Time and quality of uvflat against Blender's own unwrap, same mesh, same seams, same process.
 
     .venv/bin/python blender_scripts/benchmark.py [--meshes camelhead,suzanne] \
-        [--methods lscm,tutte] [--repeat 3] [--out bench.md]
+        [--methods lscm,tutte] [--repeat 3] [--out bench.md] [--phases] [--large] [--threads N]
 
 For every mesh (the files of ../shared/meshes, Blender's Suzanne with seams from her own UV
 islands, and ``suzanne_subdiv2``: Suzanne with a subdivision surface modifier of two levels
@@ -16,6 +16,17 @@ family, faces left without a UV solution (all corners on one point: Blender refu
 charts, uvflat reports failed charts), charts, flipped triangles, overlapping charts, and the
 area-weighted conformal / area / symmetric Dirichlet distortions (1 is perfect).
 
+Cases besides the files: ``camelhead_smart`` (camelhead cut by Blender's Smart UV Project,
+seams marked from its islands: 128 charts, the many-charts case) and, with
+``--large`` only (slow), ``disk_840k``: a flat disk of 128 triangles subdivided with 80 cuts,
+839,808 triangles in one chart.
+
+``--phases`` adds, for uvflat rows, the median seconds of each phase of the add-on's operator
+(read, solve, write, pack = Blender's packer alone, mode = edit/object mode switches), taken from
+the engine's ``Summary.phases``.  ``peak MB`` is the process's peak resident memory so far
+(``resource.getrusage``; it only grows, so read it in run order), ``threads`` the size of the
+core's thread pool (``--threads N`` sets ``RAYON_NUM_THREADS`` before the core is loaded).
+
 The ``factor s`` column is the time of one sparse Cholesky factorization of the chart system
 for the linear methods, if the uvflat module provides ``uvflat.factorization_seconds(positions,
 corner_verts, face_sizes, *, method, seams, selected)`` (the hook below); "n/a" otherwise.
@@ -24,6 +35,8 @@ corner_verts, face_sizes, *, method, seams, selected)`` (the hook below); "n/a" 
 from __future__ import annotations
 
 import argparse
+import os
+import resource
 import statistics
 import sys
 import time
@@ -58,14 +71,23 @@ def factorization_seconds(uvflat, positions, corner_verts, face_sizes, method, s
                       selected=None))
 
 
-def mesh_list(names):
+SMART_MESH = "camelhead"  # the shared mesh cut by Smart UV Project for the many-charts case
+LARGE_DISK = "disk_840k"
+
+
+def mesh_list(names, large=False):
     available = {"suzanne": None, "suzanne_subdiv2": None}
     if common.SHARED_MESHES.is_dir():
         for path in sorted(common.SHARED_MESHES.iterdir()):
             if path.suffix.lower() in (".off", ".obj", ".ply"):
                 available[path.stem] = path
+        smart = common.SHARED_MESHES / f"{SMART_MESH}.off"
+        if smart.is_file():
+            available[f"{SMART_MESH}_smart"] = smart
     else:
         print(f"note: {common.SHARED_MESHES} not found; only Blender's primitives are measured")
+    if large or LARGE_DISK in names:
+        available[LARGE_DISK] = None
     if names:
         missing = [n for n in names if n not in available]
         if missing:
@@ -74,12 +96,44 @@ def mesh_list(names):
     return available
 
 
+def smart_cut(obj):
+    """Cut ``obj`` with Blender's Smart UV Project and mark seams from its islands."""
+    common.edit_mode([obj])
+    bpy.ops.mesh.select_all(action="SELECT")
+    bpy.ops.uv.smart_project()
+    bpy.ops.object.mode_set(mode="OBJECT")
+    common.seams_from_islands(obj)
+    return obj
+
+
+def large_disk(segments=128, cuts=80):
+    """A flat disk: a triangle fan of ``segments`` triangles, every triangle split by ``cuts``
+    cuts per edge into (cuts + 1)² triangles (839,808 with the defaults)."""
+    bpy.ops.mesh.primitive_circle_add(vertices=segments, fill_type="TRIFAN")
+    obj = bpy.context.active_object
+    obj.name = LARGE_DISK
+    common.edit_mode([obj])
+    bpy.ops.mesh.select_all(action="SELECT")
+    bpy.ops.mesh.subdivide(number_cuts=cuts)
+    bpy.ops.object.mode_set(mode="OBJECT")
+    return obj
+
+
 def load(name, path):
     common.reset_scene()
     common.load_addon()
+    if name == LARGE_DISK:
+        return large_disk()
     if path is None:
         return common.suzanne_subdivided(2) if name == "suzanne_subdiv2" else common.suzanne()
-    return common.load_mesh_object(path)
+    obj = common.load_mesh_object(path)
+    return smart_cut(obj) if name.endswith("_smart") else obj
+
+
+def peak_mb():
+    """Peak resident memory of this process so far, in MB (ru_maxrss is in KB on Linux)."""
+    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    return rss / 1024.0 if sys.platform != "darwin" else rss / (1024.0 * 1024.0)
 
 
 def unsolved_faces(uv, face_sizes):
@@ -111,7 +165,7 @@ def run_once(obj, kind, method):
 def measure(uvflat, mesh_io, obj, kind, method, repeat):
     mesh = obj.data
     positions, corner_verts, face_sizes = mesh_io.read_topology(mesh)
-    times, error = [], None
+    times, error, phases = [], None, []
     for _ in range(repeat):
         # start from the same state every time: all UVs at the origin
         mesh_io.write_uv(mesh, mesh_io.ensure_uv_map(mesh)[0],
@@ -120,8 +174,14 @@ def measure(uvflat, mesh_io, obj, kind, method, repeat):
         if error:
             break
         times.append(seconds)
+        if kind == "uvflat":
+            summary = sys.modules[common.ADDON_MODULE].engine.LAST_SUMMARY
+            phases.append(dict(getattr(summary, "phases", None) or {}))
     row = {"kind": kind, "method": method, "error": error,
-           "seconds": statistics.median(times) if times else None}
+           "seconds": statistics.median(times) if times else None, "peak_mb": peak_mb()}
+    if phases:
+        row["phases"] = {name: statistics.median(p.get(name, 0.0) for p in phases)
+                         for name in PHASES}
     if error:
         return row
     uv = mesh_io.read_uv(mesh).astype(np.float64)
@@ -144,21 +204,27 @@ def measure(uvflat, mesh_io, obj, kind, method, repeat):
     return row
 
 
+PHASES = ("read", "solve", "write", "pack", "mode")
+
+
 def fmt(value, spec):
     return "–" if value is None else format(value, spec)
 
 
-def table(results):
+def table(results, threads, show_phases=False):
+    phase_head = "".join(f" {p} s |" for p in PHASES) if show_phases else ""
     head = ("| mesh | faces | method | seconds | × CONFORMAL | × family | unsolved faces | charts "
-            "| flips | overlapping | conformal | area | sym. Dirichlet | factor s | note |")
+            "| flips | overlapping | conformal | area | sym. Dirichlet | factor s |" + phase_head
+            + " peak MB | threads | note |")
     lines = [head, "|" + "---|" * (head.count("|") - 1)]
+    dashes = " – |" * (len(PHASES) if show_phases else 0)
     for mesh_name, n_faces, rows in results:
         by_method = {r["method"]: r for r in rows if r["kind"] == "blender"}
         for r in rows:
             label = r["method"] if r["kind"] == "uvflat" else f"Blender {r['method']}"
             if r["error"]:
                 lines.append(f"| {mesh_name} | {n_faces} | {label} | – | – | – | – | – | – | – | – | – "
-                             f"| – | – | refused: {r['error']} |")
+                             f"| – | – |{dashes} – | {threads} | refused: {r['error']} |")
                 continue
             ref = by_method.get("CONFORMAL", {}).get("seconds")
             fam_name = FAMILY.get(r["method"]) if r["kind"] == "uvflat" else r["method"]
@@ -167,12 +233,16 @@ def table(results):
             fam_ratio = (f"{r['seconds'] / fam:.2f} ({fam_name})" if fam else "–")
             factor = r.get("factor")
             note = r.get("note") or r.get("metrics_error") or r.get("factor_error") or ""
+            ph = r.get("phases")
+            phase_cells = ("".join(f" {fmt(ph.get(p) if ph else None, '.4f')} |" for p in PHASES)
+                           if show_phases else "")
             lines.append(
                 f"| {mesh_name} | {n_faces} | {label} | {r['seconds']:.4f} | {ratio} | {fam_ratio} "
                 f"| {r.get('unsolved', '–')} | {r.get('charts', '–')} | {r.get('flips', '–')} "
                 f"| {r.get('overlapping', '–')} | {fmt(r.get('conformal'), '.4f')} "
                 f"| {fmt(r.get('area'), '.4f')} | {fmt(r.get('dirichlet'), '.4f')} "
-                f"| {fmt(factor, '.4f') if factor is not None else 'n/a'} | {note} |")
+                f"| {fmt(factor, '.4f') if factor is not None else 'n/a'} |{phase_cells} "
+                f"{fmt(r.get('peak_mb'), '.0f')} | {threads} | {note} |")
     return "\n".join(lines)
 
 
@@ -187,6 +257,12 @@ def main(argv=None):
     parser.add_argument("--closed", action="store_true",
                         help="the closed-mesh table instead: automatic seams against Smart UV "
                              "Project + ANGLE_BASED and xatlas (see closed_benchmark.py)")
+    parser.add_argument("--phases", action="store_true",
+                        help="per-phase seconds of the add-on's operator (read, solve, write, pack, mode)")
+    parser.add_argument("--large", action="store_true",
+                        help=f"also the slow large case {LARGE_DISK} (a disk of 839,808 triangles)")
+    parser.add_argument("--threads", type=int, default=0,
+                        help="threads of the core's pool (RAYON_NUM_THREADS; default: all cores)")
     args = parser.parse_args(argv)
     if args.closed:
         import closed_benchmark
@@ -200,6 +276,10 @@ def main(argv=None):
             args.out.parent.mkdir(parents=True, exist_ok=True)
             args.out.write_text(text + "\n")
         return 0
+    if args.threads > 0:
+        # read by the core's thread pool when it starts, so set before the first unwrap
+        os.environ["RAYON_NUM_THREADS"] = str(args.threads)
+    threads = int(os.environ.get("RAYON_NUM_THREADS") or 0) or len(os.sched_getaffinity(0))
 
     import uvflat
 
@@ -214,7 +294,7 @@ def main(argv=None):
     if unknown:
         raise SystemExit(f"unknown uvflat method(s) {unknown}; available: {', '.join(known)}")
     blender_methods = [m for m in args.blender_methods.split(",") if m]
-    meshes = mesh_list([n for n in args.meshes.split(",") if n])
+    meshes = mesh_list([n for n in args.meshes.split(",") if n], large=args.large)
 
     results = []
     for name, path in meshes.items():
@@ -238,9 +318,10 @@ def main(argv=None):
                   f"{'  ' + rows[-1]['error'] if rows[-1]['error'] else ''}", flush=True)
         results.append((name, n_faces, rows))
 
-    text = table(results)
+    text = table(results, threads, show_phases=args.phases)
     header = (f"uvflat benchmark: Blender {bpy.app.version_string}, uvflat "
-              f"{getattr(uvflat, '__version__', '?')}, median of {args.repeat}, margin {MARGIN}\n\n")
+              f"{getattr(uvflat, '__version__', '?')}, median of {args.repeat}, margin {MARGIN}, "
+              f"{threads} thread(s)\n\n")
     print()
     print(header + text)
     if args.out:

@@ -1320,3 +1320,18 @@ def test_correct_aspect_halves_u_for_a_wide_texture(ext, scene):
         np.testing.assert_allclose(b.min(0) + b.max(0), a.min(0) + a.max(0), atol=1e-5)
     # the distortion attributes measure texture pixels: the same with and without correction
     assert ext.mesh_io.read_attribute(obj.data, "uvflat_conformal") is not None
+
+
+@pytest.mark.parametrize("pack", ["ALL", "OFF"], ids=["pack", "no_pack"])
+def test_phase_timings_cover_the_run(ext, scene, pack):
+    """The summary's phase timings name every phase once, are non-negative and add up to at
+    most the whole run (they are disjoint parts of it); the solve phase is the core's time."""
+    obj = suzanne()
+    result, summary = unwrap(ext, [obj], method="lscm", pack=pack)
+    assert result == {"FINISHED"}
+    phases = summary.phases
+    expected = {"read", "solve", "write", "mode"} | ({"pack"} if pack != "OFF" else set())
+    assert set(phases) == expected, phases
+    assert all(t >= 0.0 for t in phases.values()), phases
+    assert sum(phases.values()) <= summary.seconds + 1e-6, (phases, summary.seconds)
+    assert phases["solve"] == pytest.approx(summary.solve_seconds, rel=1e-9, abs=1e-12)

@@ -652,8 +652,9 @@ impl Reduced {
     }
 }
 
-/// A fill-reducing ordering of the reduced matrix: approximate minimum degree on the graph of
-/// the constrained vertices (half the size of the matrix), each vertex's rows kept together.
+/// A fill-reducing ordering of the reduced matrix: approximate minimum degree (nested
+/// dissection for large charts) on the graph of the constrained vertices (half the size of
+/// the matrix), each vertex's rows kept together.
 fn vertex_ordering(p: &Problem<'_>) -> Result<(Vec<usize>, Vec<usize>), faer::sparse::FaerError> {
     let m = p.m();
     // Group of every row: the rows of one vertex are consecutive.
@@ -684,10 +685,8 @@ fn vertex_ordering(p: &Problem<'_>) -> Result<(Vec<usize>, Vec<usize>), faer::sp
         row_idx[col_ptr[gc]..].sort_unstable();
         col_ptr[gc + 1] = row_idx.len();
     }
-    let a = faer::sparse::SymbolicSparseColMatRef::new_checked(g, g, &col_ptr, None, &row_idx);
-    let (mut gfwd, mut ginv) = (vec![0usize; g], vec![0usize; g]);
-    let mut mem = faer::dyn_stack::MemBuffer::try_new(faer::sparse::linalg::amd::order_maybe_unsorted_scratch::<usize>(g, row_idx.len()))?;
-    faer::sparse::linalg::amd::order_maybe_unsorted(&mut gfwd, &mut ginv, a, Default::default(), faer::dyn_stack::MemStack::new(&mut mem))?;
+    // AMD, or nested dissection for large charts (see `solvers::ordering`).
+    let gfwd = crate::solvers::ordering::fill_reducing(crate::solvers::ordering::OrderingKind::Auto, g, &col_ptr, &row_idx)?.fwd;
     let mut fwd = Vec::with_capacity(m);
     for &gv in &gfwd {
         fwd.extend(start[gv]..start[gv + 1]);

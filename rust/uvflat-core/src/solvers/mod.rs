@@ -2,6 +2,7 @@
 //! (and the global steps of the iterative ones).
 
 pub mod line_search;
+pub mod ordering;
 mod quadratic;
 
 pub use quadratic::{FixedValueSolver, Scalar, Symmetry};

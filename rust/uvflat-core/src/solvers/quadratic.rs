@@ -17,11 +17,14 @@
 //! The scalar is `f64` by default or [`faer::c64`]: a complex Hermitian `Q` (conformal
 //! energies are Hermitian forms in `w = u + iv`) halves the dimension of the real system.
 
+use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::solvers::{Llt, Lu, SymbolicLlt, SymbolicLu};
-use faer::sparse::{Pair, SparseColMat, SymbolicSparseColMat};
+use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, LltRef, SymbolicCholesky, SymmetricOrdering};
+use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
+use faer::sparse::{Pair, SparseColMatRef, SymbolicSparseColMat};
 use faer::{Mat, Side};
 
+use super::ordering::{fill_reducing, OrderingKind};
 use super::SolveError;
 
 /// The scalars the solver works in: `f64`, or `c64` for Hermitian problems.
@@ -34,6 +37,7 @@ pub trait Scalar:
     + std::fmt::Debug
     + std::ops::Mul<Output = Self>
     + std::ops::SubAssign
+    + std::ops::AddAssign
     + 'static
 {
     /// Additive identity.
@@ -79,20 +83,25 @@ pub enum Symmetry {
     General,
 }
 
-enum Symbolic {
-    Llt(SymbolicLlt<usize>),
+enum Symbolic<T> {
+    /// Cholesky with our fill-reducing ordering (see [`super::ordering`]); the factor's values
+    /// and the factorization/solve scratch are allocated once and reused by every refactor
+    /// (the scratch behind a mutex, so that `solve(&self)` can use it and the solver stays
+    /// `Sync`).
+    Llt { symbolic: Box<SymbolicCholesky<usize>>, l_values: Vec<T>, mem: std::sync::Mutex<MemBuffer> },
     Lu(SymbolicLu<usize>),
 }
 
 enum Factor<T> {
-    Llt(Llt<usize, T>),
-    Lu(Lu<usize, T>),
+    /// The values of the last successful Cholesky factorization are in `Symbolic::Llt`.
+    Llt,
+    Lu(Box<Lu<usize, T>>),
 }
 
 /// Where an input triplet goes.
 #[derive(Clone, Copy)]
 enum Slot {
-    /// Entry of `Q_FF` (index into the value list of the pattern).
+    /// Entry of `Q_FF` (index into the list of its entries, duplicates included).
     FreeFree(u32),
     /// Entry of `Q_FC`: (free row, fixed column position).
     FreeFixed(u32, u32),
@@ -100,6 +109,40 @@ enum Slot {
     FreeFixedConj(u32, u32),
     /// Row of a fixed unknown, or upper triangle of a symmetric matrix: unused.
     Unused,
+}
+
+/// Top bit of a [`FixedValueSolver`] `sum_order` entry: a duplicate of the previous entry.
+const DUPLICATE: u32 = 1 << 31;
+
+/// The entries `pairs` in compressed-column order (by column, then row), duplicates flagged
+/// with [`DUPLICATE`]; ties ordered exactly as faer's `try_new_from_indices` orders them
+/// (bucket by column in input order, then the same unstable sort by (row, col)), so values
+/// are summed in the same order as faer's own assembly would.
+fn compressed_order(ncols: usize, pairs: &[Pair<usize, usize>]) -> Vec<u32> {
+    let mut start = vec![0usize; ncols + 1];
+    for p in pairs {
+        start[p.col + 1] += 1;
+    }
+    for c in 0..ncols {
+        start[c + 1] += start[c];
+    }
+    let mut next = start.clone();
+    let mut order = vec![0usize; pairs.len()];
+    for (i, p) in pairs.iter().enumerate() {
+        order[next[p.col]] = i;
+        next[p.col] += 1;
+    }
+    for w in start.windows(2) {
+        order[w[0]..w[1]].sort_unstable_by_key(|&i| (pairs[i].row, pairs[i].col));
+    }
+    let mut out = Vec::with_capacity(order.len());
+    let mut prev = (usize::MAX, usize::MAX);
+    for &i in &order {
+        let key = (pairs[i].row, pairs[i].col);
+        out.push(i as u32 | if key == prev { DUPLICATE } else { 0 });
+        prev = key;
+    }
+    out
 }
 
 /// The quadratic-with-fixed-values solver (see the module docs).
@@ -110,10 +153,15 @@ pub struct FixedValueSolver<T: Scalar = f64> {
     fixed: Vec<u32>,
     slots: Vec<Slot>,
     ff_symbolic: SymbolicSparseColMat<usize>,
-    ff_argsort: faer::sparse::Argsort<usize>,
+    /// Values of the entries of `Q_FF` in input order (duplicates included).
+    pair_values: Vec<T>,
+    /// Entries in compressed-column order; the top bit marks a duplicate of the previous one
+    /// (summed into it, in this order: the order faer itself sums duplicates in).
+    sum_order: Vec<u32>,
+    /// Values of `Q_FF` in the order of `ff_symbolic`, rewritten in place by every refactor.
     ff_values: Vec<T>,
     coupling: Vec<(u32, u32, T)>,
-    symbolic: Symbolic,
+    symbolic: Symbolic<T>,
     factor: Option<Factor<T>>,
 }
 
@@ -158,12 +206,29 @@ impl<T: Scalar> FixedValueSolver<T> {
             slots.push(slot);
         }
         let nf = free.len();
-        let (ff_symbolic, ff_argsort) = SymbolicSparseColMat::try_new_from_indices(nf, nf, &pairs)
+        let (ff_symbolic, _) = SymbolicSparseColMat::try_new_from_indices(nf, nf, &pairs)
             .map_err(|e| SolveError::Other(format!("{e:?}")))?;
+        if pairs.len() >= DUPLICATE as usize {
+            return Err(SolveError::Other(format!("{} matrix entries exceed the solver's 2³¹ limit", pairs.len())));
+        }
+        let sum_order = compressed_order(nf, &pairs);
+        let nnz_ff = ff_symbolic.row_idx().len();
         let symbolic = match symmetry {
-            Symmetry::Symmetric => Symbolic::Llt(
-                SymbolicLlt::try_new(ff_symbolic.as_ref(), Side::Lower).map_err(|e| SolveError::Other(format!("{e:?}")))?,
-            ),
+            Symmetry::Symmetric => {
+                let other = |e: &dyn std::fmt::Debug| SolveError::Other(format!("{e:?}"));
+                let a = ff_symbolic.as_ref();
+                let perm = fill_reducing(OrderingKind::Auto, nf, a.col_ptr(), a.row_idx()).map_err(|e| other(&e))?;
+                let perm_ref = faer::perm::PermRef::new_checked(&perm.fwd, &perm.inv, nf);
+                let symbolic = factorize_symbolic_cholesky(a, Side::Lower, SymmetricOrdering::Custom(perm_ref), Default::default())
+                    .map_err(|e| other(&e))?;
+                let par = faer::get_global_parallelism();
+                let req = symbolic
+                    .factorize_numeric_llt_scratch::<T>(par, Default::default())
+                    .or(symbolic.solve_in_place_scratch::<T>(2, par));
+                let mem = MemBuffer::try_new(req).map_err(|e| other(&e))?;
+                let l_values = vec![T::zero_value(); symbolic.len_val()];
+                Symbolic::Llt { symbolic: Box::new(symbolic), l_values, mem: std::sync::Mutex::new(mem) }
+            }
             Symmetry::General => {
                 Symbolic::Lu(SymbolicLu::try_new(ff_symbolic.as_ref()).map_err(|e| SolveError::Other(format!("{e:?}")))?)
             }
@@ -175,8 +240,9 @@ impl<T: Scalar> FixedValueSolver<T> {
             fixed: fixed.to_vec(),
             slots,
             ff_symbolic,
-            ff_argsort,
-            ff_values: vec![T::zero_value(); pairs.len()],
+            pair_values: vec![T::zero_value(); pairs.len()],
+            sum_order,
+            ff_values: vec![T::zero_value(); nnz_ff],
             coupling: Vec::new(),
             symbolic,
             factor: None,
@@ -194,26 +260,37 @@ impl<T: Scalar> FixedValueSolver<T> {
         self.coupling.clear();
         for (slot, &v) in self.slots.iter().zip(values) {
             match *slot {
-                Slot::FreeFree(k) => self.ff_values[k as usize] = v,
+                Slot::FreeFree(k) => self.pair_values[k as usize] = v,
                 Slot::FreeFixed(r, c) => self.coupling.push((r, c, v)),
                 Slot::FreeFixedConj(r, c) => self.coupling.push((r, c, v.conjugate())),
                 Slot::Unused => {}
             }
         }
-        let mat = SparseColMat::new_from_argsort(self.ff_symbolic.clone(), &self.ff_argsort, &self.ff_values)
-            .map_err(|e| SolveError::Other(format!("{e:?}")))?;
+        let mut at = usize::MAX;
+        for &e in &self.sum_order {
+            let v = self.pair_values[(e & !DUPLICATE) as usize];
+            if e & DUPLICATE != 0 {
+                self.ff_values[at] += v;
+            } else {
+                at = at.wrapping_add(1);
+                self.ff_values[at] = v;
+            }
+        }
+        let mat = SparseColMatRef::new(self.ff_symbolic.as_ref(), &self.ff_values);
         self.factor = None;
-        self.factor = Some(match &self.symbolic {
-            Symbolic::Llt(sym) => Factor::Llt(Llt::try_new_with_symbolic(sym.clone(), mat.as_ref(), Side::Lower).map_err(
-                |e| match e {
-                    faer::sparse::linalg::LltError::Numeric(_) => SolveError::NotPositiveDefinite,
-                    other => SolveError::Other(format!("{other:?}")),
-                },
-            )?),
-            Symbolic::Lu(sym) => Factor::Lu(Lu::try_new_with_symbolic(sym.clone(), mat.as_ref()).map_err(|e| match e {
+        self.factor = Some(match &mut self.symbolic {
+            Symbolic::Llt { symbolic, l_values, mem } => {
+                let par = faer::get_global_parallelism();
+                let mut mem = mem.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+                symbolic
+                    .factorize_numeric_llt(l_values, mat, Side::Lower, Default::default(), par, MemStack::new(&mut mem), Default::default())
+                    .map_err(|_| SolveError::NotPositiveDefinite)?;
+                Factor::Llt
+            }
+            Symbolic::Lu(sym) => Factor::Lu(Box::new(Lu::try_new_with_symbolic(sym.clone(), mat).map_err(|e| match e {
                 faer::sparse::linalg::LuError::SymbolicSingular { .. } => SolveError::Singular,
                 other => SolveError::Other(format!("{other:?}")),
-            })?),
+            })?)),
         });
         Ok(())
     }
@@ -252,10 +329,19 @@ impl<T: Scalar> FixedValueSolver<T> {
                 rhs[(r as usize, col)] -= prod;
             }
         }
-        match &self.factor {
-            Some(Factor::Llt(f)) => f.solve_in_place(rhs.as_mut()),
-            Some(Factor::Lu(f)) => f.solve_in_place(rhs.as_mut()),
-            None => return Err(SolveError::NotPositiveDefinite),
+        match (&self.factor, &self.symbolic) {
+            (Some(Factor::Llt), Symbolic::Llt { symbolic, l_values, mem }) => {
+                let par = faer::get_global_parallelism();
+                let mut mem = mem.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+                if k > 2 {
+                    // More columns than the scratch was sized for (never in practice).
+                    let req = symbolic.solve_in_place_scratch::<T>(k, par);
+                    *mem = MemBuffer::try_new(req).map_err(|e| SolveError::Other(format!("{e:?}")))?;
+                }
+                LltRef::new(symbolic, l_values).solve_in_place_with_conj(faer::Conj::No, rhs.as_mut(), par, MemStack::new(&mut mem));
+            }
+            (Some(Factor::Lu(f)), _) => f.solve_in_place(rhs.as_mut()),
+            _ => return Err(SolveError::NotPositiveDefinite),
         }
         let mut out = Vec::with_capacity(k);
         for col in 0..k {
@@ -313,5 +399,54 @@ mod tests {
         // Singular: the unanchored Laplacian.
         let r = s.refactor(&[1.0, 1.0, -1.0, -1.0]);
         assert!(r.is_err() || s.solve(&[vec![]], &[vec![1.0, -1.0]]).is_err());
+    }
+
+    /// A grid large enough for nested dissection (see `ordering::ND_MIN_SIZE`): the 5-point
+    /// Laplacian with a linear function on the border reproduces it exactly inside, and AMD's
+    /// size class (a small grid) agrees too; refactoring reuses the buffers.
+    #[test]
+    fn nested_dissection_sized_system_reproduces_linear_functions() {
+        for k in [30usize, 215] {
+            let id = |i: usize, j: usize| (j * k + i) as u32;
+            let mut t = Vec::new();
+            let mut fixed = Vec::new();
+            for j in 0..k {
+                for i in 0..k {
+                    if i == 0 || j == 0 || i == k - 1 || j == k - 1 {
+                        fixed.push(id(i, j));
+                    }
+                    if i + 1 < k {
+                        let (a, b) = (id(i, j), id(i + 1, j));
+                        t.extend([(a, a, 1.0), (b, b, 1.0), (b, a, -1.0)]);
+                    }
+                    if j + 1 < k {
+                        let (a, b) = (id(i, j), id(i, j + 1));
+                        t.extend([(a, a, 1.0), (b, b, 1.0), (b, a, -1.0)]);
+                    }
+                }
+            }
+            let n = k * k;
+            assert_eq!(super::super::ordering::OrderingKind::Auto.resolve(n - fixed.len()) == super::super::ordering::OrderingKind::NestedDissection, k > 200);
+            let f = |v: u32| {
+                let (i, j) = ((v as usize % k) as f64, (v as usize / k) as f64);
+                0.5 + i - 2.0 * j
+            };
+            let mut s = FixedValueSolver::new(n, &t, &fixed, Symmetry::Symmetric).unwrap();
+            for scale in [1.0, 3.0] {
+                let values: Vec<f64> = t.iter().map(|e| e.2 * scale).collect();
+                s.refactor(&values).unwrap();
+                let x = s.solve(&[fixed.iter().map(|&v| f(v)).collect()], &[]).unwrap();
+                for v in 0..n as u32 {
+                    assert!((x[0][v as usize] - f(v)).abs() < 1e-8 * k as f64, "k {k} vertex {v}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_solver_can_be_shared_across_threads() {
+        fn assert_send_sync<S: Send + Sync>() {}
+        assert_send_sync::<FixedValueSolver<f64>>();
+        assert_send_sync::<FixedValueSolver<faer::c64>>();
     }
 }

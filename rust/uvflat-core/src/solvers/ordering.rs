@@ -1,0 +1,551 @@
+//! Fill-reducing orderings for sparse Cholesky: faer's approximate minimum degree (AMD) for
+//! small systems, nested dissection above [`ND_MIN_SIZE`] unknowns.
+//!
+//! Nested dissection (George 1973; the graph form of Liu 1989 / George & Liu's "automatic
+//! nested dissection"): find a small vertex separator `S` that splits the graph of the matrix
+//! into two parts `A` and `B` with no edge between them, order `A`, then `B`, then `S` last,
+//! and recurse into `A` and `B`. Eliminating `A` creates no fill in `B`, so the factor of a
+//! planar mesh's Laplacian has `O(n log n)` nonzeros. Separators here are levels of a
+//! breadth-first level structure rooted at a pseudo-peripheral vertex (Gibbs, Poole &
+//! Stockmeyer 1976), the level minimising the ratio cut |S|·n / (|A|·|B|), then
+//! thinned: a separator vertex with no neighbour on the `B` side joins `A`. Parts of at most
+//! [`ND_LEAF_SIZE`] vertices are ordered by AMD. Meshes are nearly planar graphs whose BFS
+//! levels are short closed curves, which makes these separators `O(√n)` — what a geometric
+//! bisection would give, without needing positions.
+//!
+//! Preconditions: a square pattern (any triangle, or both; the diagonal is ignored).
+//! Failures: only faer's allocation / index overflow errors from AMD.
+
+use faer::sparse::FaerError;
+
+/// Systems with at least this many unknowns use nested dissection in
+/// [`OrderingKind::Auto`]; smaller ones AMD. Measured with `examples/ordering.rs`: see the
+/// README's performance section.
+pub const ND_MIN_SIZE: usize = 40_000;
+
+/// Parts of at most this many vertices stop the dissection and are ordered by AMD.
+pub const ND_LEAF_SIZE: usize = 256;
+
+/// Which fill-reducing ordering to compute.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum OrderingKind {
+    /// AMD below [`ND_MIN_SIZE`] unknowns, nested dissection from there on. Default.
+    #[default]
+    Auto,
+    /// faer's approximate minimum degree.
+    Amd,
+    /// Nested dissection with BFS level-structure separators.
+    NestedDissection,
+}
+
+impl OrderingKind {
+    /// The ordering actually used for a system of `n` unknowns.
+    pub fn resolve(self, n: usize) -> OrderingKind {
+        match self {
+            OrderingKind::Auto if n >= ND_MIN_SIZE => OrderingKind::NestedDissection,
+            OrderingKind::Auto => OrderingKind::Amd,
+            other => other,
+        }
+    }
+}
+
+/// A symmetric permutation as faer takes it: `fwd[new] = old`, `inv[old] = new`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Permutation {
+    /// Old index at every new position (elimination order).
+    pub fwd: Vec<usize>,
+    /// New position of every old index.
+    pub inv: Vec<usize>,
+}
+
+impl Permutation {
+    fn from_fwd(fwd: Vec<usize>) -> Self {
+        let mut inv = vec![0usize; fwd.len()];
+        for (new, &old) in fwd.iter().enumerate() {
+            inv[old] = new;
+        }
+        Permutation { fwd, inv }
+    }
+}
+
+/// Compute a fill-reducing ordering of the `n × n` symmetric pattern given in compressed
+/// column form (`col_ptr`, `row_idx`; either triangle or both, unsorted allowed).
+pub fn fill_reducing(kind: OrderingKind, n: usize, col_ptr: &[usize], row_idx: &[usize]) -> Result<Permutation, FaerError> {
+    if n <= 2 {
+        // No ordering can change the fill of a 1×1 or 2×2 factor (one-triangle charts).
+        return Ok(Permutation::from_fwd((0..n).collect()));
+    }
+    let graph = Graph::from_pattern(n, col_ptr, row_idx);
+    match kind.resolve(n) {
+        OrderingKind::NestedDissection => {
+            // Unknowns with identical closed neighbourhoods (the u and v of one vertex in a
+            // 2×2-block system) are one supervariable: dissect the smaller quotient graph.
+            let (quotient, members) = graph.compress();
+            if quotient.n() * 4 > n * 3 {
+                return nested_dissection(&graph);
+            }
+            let order = nested_dissection(&quotient)?;
+            let fwd = order.fwd.iter().flat_map(|&sv| members[sv].iter().copied()).collect();
+            Ok(Permutation::from_fwd(fwd))
+        }
+        _ => {
+            let all: Vec<usize> = (0..n).collect();
+            let mut local = vec![usize::MAX; n];
+            Ok(Permutation::from_fwd(amd_of_subset(&graph, &all, &mut local)?))
+        }
+    }
+}
+
+/// Undirected adjacency without self loops or duplicate edges.
+struct Graph {
+    ptr: Vec<usize>,
+    adj: Vec<usize>,
+}
+
+impl Graph {
+    fn from_pattern(n: usize, col_ptr: &[usize], row_idx: &[usize]) -> Graph {
+        let mut deg = vec![0usize; n + 1];
+        for c in 0..n {
+            for &r in &row_idx[col_ptr[c]..col_ptr[c + 1]] {
+                if r != c {
+                    deg[r] += 1;
+                    deg[c] += 1;
+                }
+            }
+        }
+        let mut ptr = vec![0usize; n + 1];
+        for v in 0..n {
+            ptr[v + 1] = ptr[v] + deg[v];
+        }
+        let mut fill = ptr.clone();
+        let mut adj = vec![0usize; ptr[n]];
+        for c in 0..n {
+            for &r in &row_idx[col_ptr[c]..col_ptr[c + 1]] {
+                if r != c {
+                    adj[fill[r]] = c;
+                    fill[r] += 1;
+                    adj[fill[c]] = r;
+                    fill[c] += 1;
+                }
+            }
+        }
+        // Remove duplicates (an entry given in both triangles, or repeated).
+        let mut mark = vec![usize::MAX; n];
+        let mut out_ptr = vec![0usize; n + 1];
+        let mut k = 0;
+        for v in 0..n {
+            let (a, b) = (ptr[v], ptr[v + 1]);
+            for i in a..b {
+                let w = adj[i];
+                if mark[w] != v {
+                    mark[w] = v;
+                    adj[k] = w;
+                    k += 1;
+                }
+            }
+            out_ptr[v + 1] = k;
+        }
+        adj.truncate(k);
+        Graph { ptr: out_ptr, adj }
+    }
+
+    fn n(&self) -> usize {
+        self.ptr.len() - 1
+    }
+
+    /// Merge vertices whose closed neighbourhoods (neighbours and the vertex itself) are
+    /// equal into supervariables. Returns the quotient graph and the members of each
+    /// supervariable.
+    fn compress(&self) -> (Graph, Vec<Vec<usize>>) {
+        let n = self.n();
+        let closed: Vec<Vec<usize>> = (0..n)
+            .map(|v| {
+                let mut c = self.neighbours(v).to_vec();
+                c.push(v);
+                c.sort_unstable();
+                c
+            })
+            .collect();
+        let hash = |c: &[usize]| c.iter().fold(c.len() as u64, |h, &w| h.wrapping_mul(0x100000001b3).wrapping_add(w as u64 ^ 0x9e3779b97f4a7c15));
+        let mut keys: Vec<(u64, usize)> = (0..n).map(|v| (hash(&closed[v]), v)).collect();
+        keys.sort_unstable();
+        let mut super_of = vec![usize::MAX; n];
+        let mut members: Vec<Vec<usize>> = Vec::new();
+        let mut i = 0;
+        while i < n {
+            let mut j = i;
+            while j < n && keys[j].0 == keys[i].0 {
+                j += 1;
+            }
+            // Equal hashes: group by exact equality.
+            for a in i..j {
+                let va = keys[a].1;
+                if super_of[va] != usize::MAX {
+                    continue;
+                }
+                super_of[va] = members.len();
+                let mut group = vec![va];
+                for b in a + 1..j {
+                    let vb = keys[b].1;
+                    if super_of[vb] == usize::MAX && closed[va] == closed[vb] {
+                        super_of[vb] = members.len();
+                        group.push(vb);
+                    }
+                }
+                group.sort_unstable();
+                members.push(group);
+            }
+            i = j;
+        }
+        // Quotient graph, by supervariables in order of their first member.
+        let mut order: Vec<usize> = (0..members.len()).collect();
+        order.sort_unstable_by_key(|&s| members[s][0]);
+        let mut renumber = vec![0usize; members.len()];
+        for (new, &old) in order.iter().enumerate() {
+            renumber[old] = new;
+        }
+        let members: Vec<Vec<usize>> = order.iter().map(|&s| members[s].clone()).collect();
+        let m = members.len();
+        let mut ptr = vec![0usize; m + 1];
+        let mut adj = Vec::new();
+        let mut mark = vec![usize::MAX; m];
+        for (sv, group) in members.iter().enumerate() {
+            mark[sv] = sv;
+            for &w in self.neighbours(group[0]) {
+                let sw = renumber[super_of[w]];
+                if mark[sw] != sv {
+                    mark[sw] = sv;
+                    adj.push(sw);
+                }
+            }
+            ptr[sv + 1] = adj.len();
+        }
+        (Graph { ptr, adj }, members)
+    }
+
+    fn neighbours(&self, v: usize) -> &[usize] {
+        &self.adj[self.ptr[v]..self.ptr[v + 1]]
+    }
+}
+
+/// AMD ordering of the subgraph induced by `verts`; returns `verts` reordered. `local` is a
+/// scratch map (all `usize::MAX` on entry and on return).
+fn amd_of_subset(g: &Graph, verts: &[usize], local: &mut [usize]) -> Result<Vec<usize>, FaerError> {
+    let m = verts.len();
+    if m <= 2 {
+        return Ok(verts.to_vec());
+    }
+    for (i, &v) in verts.iter().enumerate() {
+        local[v] = i;
+    }
+    // Upper triangle (row < column) of the induced subgraph, by columns.
+    let mut col_ptr = Vec::with_capacity(m + 1);
+    col_ptr.push(0usize);
+    let mut row_idx = Vec::new();
+    for &v in verts {
+        let j = local[v];
+        for &w in g.neighbours(v) {
+            let i = local[w];
+            if i < j {
+                row_idx.push(i);
+            }
+        }
+        let c0 = *col_ptr.last().expect("starts with 0");
+        row_idx[c0..].sort_unstable();
+        col_ptr.push(row_idx.len());
+    }
+    for &v in verts {
+        local[v] = usize::MAX;
+    }
+    let a = faer::sparse::SymbolicSparseColMatRef::new_checked(m, m, &col_ptr, None, &row_idx);
+    let (mut fwd, mut inv) = (vec![0usize; m], vec![0usize; m]);
+    let mut mem =
+        faer::dyn_stack::MemBuffer::try_new(faer::sparse::linalg::amd::order_maybe_unsorted_scratch::<usize>(m, row_idx.len()))
+            .map_err(|_| FaerError::OutOfMemory)?;
+    faer::sparse::linalg::amd::order_maybe_unsorted(&mut fwd, &mut inv, a, Default::default(), faer::dyn_stack::MemStack::new(&mut mem))?;
+    Ok(fwd.into_iter().map(|i| verts[i]).collect())
+}
+
+/// Nested dissection of the whole graph.
+fn nested_dissection(g: &Graph) -> Result<Permutation, FaerError> {
+    let n = g.n();
+    let mut d = Dissector {
+        g,
+        region: vec![0u32; n],
+        next_region: 1,
+        stamp: vec![0u32; n],
+        next_stamp: 0,
+        local: vec![usize::MAX; n],
+        out: Vec::with_capacity(n),
+    };
+    d.dissect((0..n).collect(), 0)?;
+    debug_assert_eq!(d.out.len(), n);
+    Ok(Permutation::from_fwd(d.out))
+}
+
+struct Dissector<'g> {
+    g: &'g Graph,
+    /// Region (sub-problem) of every vertex: searches stay inside one region.
+    region: Vec<u32>,
+    next_region: u32,
+    /// Visit stamps of the breadth-first searches.
+    stamp: Vec<u32>,
+    next_stamp: u32,
+    /// Scratch for [`amd_of_subset`].
+    local: Vec<usize>,
+    /// The elimination order built so far.
+    out: Vec<usize>,
+}
+
+/// Breadth-first level structure: vertices in visit order and the start of every level.
+struct Levels {
+    order: Vec<usize>,
+    start: Vec<usize>,
+}
+
+impl Levels {
+    fn depth(&self) -> usize {
+        self.start.len() - 1
+    }
+    fn level(&self, k: usize) -> &[usize] {
+        &self.order[self.start[k]..self.start[k + 1]]
+    }
+}
+
+impl Dissector<'_> {
+    fn new_region(&mut self, verts: &[usize]) {
+        let r = self.next_region;
+        self.next_region += 1;
+        for &v in verts {
+            self.region[v] = r;
+        }
+    }
+
+    /// Level structure from `root` inside `root`'s region.
+    fn bfs(&mut self, root: usize) -> Levels {
+        self.next_stamp += 1;
+        let s = self.next_stamp;
+        let r = self.region[root];
+        let mut order = vec![root];
+        let mut start = vec![0usize];
+        self.stamp[root] = s;
+        let mut head = 0;
+        while head < order.len() {
+            // Visit the whole current level, appending the next one.
+            let end = order.len();
+            while head < end {
+                let v = order[head];
+                head += 1;
+                for &w in self.g.neighbours(v) {
+                    if self.region[w] == r && self.stamp[w] != s {
+                        self.stamp[w] = s;
+                        order.push(w);
+                    }
+                }
+            }
+            start.push(end);
+        }
+        Levels { order, start }
+    }
+
+    /// Append an elimination order of `verts` (all in one fresh region) to `out`.
+    fn dissect(&mut self, verts: Vec<usize>, depth: usize) -> Result<(), FaerError> {
+        if verts.len() <= ND_LEAF_SIZE || depth > 64 {
+            let ordered = amd_of_subset(self.g, &verts, &mut self.local)?;
+            self.out.extend(ordered);
+            return Ok(());
+        }
+        self.new_region(&verts);
+        // Pseudo-peripheral root: repeat the search from a narrowest vertex of the last level
+        // while the depth grows.
+        let mut levels = self.bfs(verts[0]);
+        if levels.order.len() < verts.len() {
+            return self.split_components(verts, levels, depth);
+        }
+        for _ in 0..4 {
+            let last = levels.level(levels.depth() - 1);
+            let root = *last.iter().min_by_key(|&&v| self.g.neighbours(v).len()).expect("levels are non-empty");
+            let next = self.bfs(root);
+            if next.depth() <= levels.depth() {
+                break;
+            }
+            levels = next;
+        }
+        let m = levels.depth();
+        if m < 3 {
+            let ordered = amd_of_subset(self.g, &verts, &mut self.local)?;
+            self.out.extend(ordered);
+            return Ok(());
+        }
+        // Separator level k in 1..m-1 minimising |S|·n / (|A|·|B|).
+        let n = verts.len();
+        let mut best = (f64::INFINITY, (m - 1) / 2);
+        for k in 1..m - 1 {
+            let a = levels.start[k];
+            let b = n - levels.start[k + 1];
+            let s = levels.start[k + 1] - levels.start[k];
+            // Ratio cut: separator size over the product of the sides' fractions.
+            let cost = s as f64 * n as f64 / (a as f64 * b as f64);
+            if cost < best.0 {
+                best = (cost, k);
+            }
+        }
+        let k = best.1;
+        let mut part_a: Vec<usize> = levels.order[..levels.start[k]].to_vec();
+        let part_b: Vec<usize> = levels.order[levels.start[k + 1]..].to_vec();
+        // Thin the separator: a level-k vertex with no neighbour in B separates nothing.
+        let rb = self.next_region;
+        self.new_region(&part_b);
+        let mut sep = Vec::new();
+        for &v in levels.level(k) {
+            if self.g.neighbours(v).iter().any(|&w| self.region[w] == rb) {
+                sep.push(v);
+            } else {
+                part_a.push(v);
+            }
+        }
+        self.dissect(part_a, depth + 1)?;
+        self.dissect(part_b, depth + 1)?;
+        self.out.extend(sep);
+        Ok(())
+    }
+
+    /// `verts` is disconnected: order each connected component on its own.
+    fn split_components(&mut self, verts: Vec<usize>, first: Levels, depth: usize) -> Result<(), FaerError> {
+        // Vertices reached by the first search carry its stamp, those of later searches
+        // larger ones; unreached vertices older ones.
+        let first_stamp = self.next_stamp;
+        let mut components = vec![first.order];
+        for &v in &verts {
+            if self.stamp[v] < first_stamp {
+                let comp = self.bfs(v).order;
+                components.push(comp);
+            }
+        }
+        for comp in components {
+            self.dissect(comp, depth + 1)?;
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Pattern (lower triangle with diagonal) of the 5-point Laplacian on a `k × k` grid.
+    fn grid(k: usize) -> (usize, Vec<usize>, Vec<usize>) {
+        let n = k * k;
+        let mut col_ptr = vec![0];
+        let mut row_idx = Vec::new();
+        for j in 0..k {
+            for i in 0..k {
+                let v = j * k + i;
+                row_idx.push(v);
+                if i + 1 < k {
+                    row_idx.push(v + 1);
+                }
+                if j + 1 < k {
+                    row_idx.push(v + k);
+                }
+                col_ptr.push(row_idx.len());
+            }
+        }
+        (n, col_ptr, row_idx)
+    }
+
+    /// Number of nonzeros of the Cholesky factor of the permuted pattern (symbolic).
+    fn nnz_l(n: usize, col_ptr: &[usize], row_idx: &[usize], p: &Permutation) -> usize {
+        let a = faer::sparse::SymbolicSparseColMatRef::new_checked(n, n, col_ptr, None, row_idx);
+        let perm = faer::perm::PermRef::new_checked(&p.fwd, &p.inv, n);
+        let s = faer::sparse::linalg::cholesky::factorize_symbolic_cholesky(
+            a,
+            faer::Side::Lower,
+            faer::sparse::linalg::cholesky::SymmetricOrdering::Custom(perm),
+            Default::default(),
+        )
+        .unwrap();
+        s.len_val()
+    }
+
+    fn assert_permutation(p: &Permutation, n: usize) {
+        assert_eq!(p.fwd.len(), n);
+        let mut seen = vec![false; n];
+        for (new, &old) in p.fwd.iter().enumerate() {
+            assert!(!seen[old], "{old} twice");
+            seen[old] = true;
+            assert_eq!(p.inv[old], new);
+        }
+    }
+
+    #[test]
+    fn every_ordering_is_a_permutation_also_of_disconnected_graphs() {
+        let (n, mut col_ptr, mut row_idx) = grid(40);
+        // Append 300 isolated vertices and 50 disjoint edges.
+        let mut m = n;
+        for e in 0..350 {
+            row_idx.push(m);
+            if e >= 300 && e % 2 == 0 {
+                row_idx.push(m + 1);
+            }
+            col_ptr.push(row_idx.len());
+            m += 1;
+        }
+        for kind in [OrderingKind::Amd, OrderingKind::NestedDissection, OrderingKind::Auto] {
+            let p = fill_reducing(kind, m, &col_ptr, &row_idx).unwrap();
+            assert_permutation(&p, m);
+        }
+        for n in [0, 1, 2, 3] {
+            let (col_ptr, row_idx): (Vec<usize>, Vec<usize>) = ((0..=n).collect(), (0..n).collect());
+            let p = fill_reducing(OrderingKind::NestedDissection, n, &col_ptr, &row_idx).unwrap();
+            assert_permutation(&p, n);
+        }
+    }
+
+    #[test]
+    fn nested_dissection_of_a_grid_has_n_log_n_fill_and_beats_the_natural_order() {
+        // Natural (banded) order of a k × k grid fills ~k³; nested dissection O(k² log k).
+        let k = 120;
+        let (n, col_ptr, row_idx) = grid(k);
+        let nd = fill_reducing(OrderingKind::NestedDissection, n, &col_ptr, &row_idx).unwrap();
+        assert_permutation(&nd, n);
+        let natural = Permutation::from_fwd((0..n).collect());
+        let amd = fill_reducing(OrderingKind::Amd, n, &col_ptr, &row_idx).unwrap();
+        let (f_nd, f_nat, f_amd) =
+            (nnz_l(n, &col_ptr, &row_idx, &nd), nnz_l(n, &col_ptr, &row_idx, &natural), nnz_l(n, &col_ptr, &row_idx, &amd));
+        assert!(f_nd * 2 < f_nat, "nd {f_nd} natural {f_nat}");
+        // Within a small factor of AMD, and below c · n log2 n.
+        assert!((f_nd as f64) < 1.5 * f_amd as f64, "nd {f_nd} amd {f_amd}");
+        assert!((f_nd as f64) < 4.0 * n as f64 * (n as f64).log2(), "nd {f_nd}");
+    }
+
+    #[test]
+    fn two_by_two_blocks_are_dissected_as_one_supervariable_per_vertex() {
+        // Expand the grid pattern to 2×2 blocks (u, v of one vertex): the two unknowns of a
+        // vertex have equal closed neighbourhoods and stay next to each other in the order.
+        let k = 60;
+        let (n, col_ptr, row_idx) = grid(k);
+        let (mut bp, mut br) = (vec![0usize], Vec::new());
+        for c in 0..n {
+            for bc in 0..2 {
+                for &r in &row_idx[col_ptr[c]..col_ptr[c + 1]] {
+                    for b in 0..2 {
+                        if 2 * r + b >= 2 * c + bc {
+                            br.push(2 * r + b);
+                        }
+                    }
+                }
+                bp.push(br.len());
+            }
+        }
+        let m = 2 * n;
+        let nd = fill_reducing(OrderingKind::NestedDissection, m, &bp, &br).unwrap();
+        assert_permutation(&nd, m);
+        for pair in nd.fwd.chunks(2) {
+            assert_eq!(pair[0] / 2, pair[1] / 2, "{pair:?}");
+        }
+        let amd = fill_reducing(OrderingKind::Amd, m, &bp, &br).unwrap();
+        let (f_nd, f_amd) = (nnz_l(m, &bp, &br, &nd), nnz_l(m, &bp, &br, &amd));
+        assert!((f_nd as f64) < 1.5 * f_amd as f64, "nd {f_nd} amd {f_amd}");
+    }
+}
