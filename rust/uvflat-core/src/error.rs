@@ -42,6 +42,10 @@ pub enum UvError {
     /// A prescribed angle sum (ABF option `angle_sums`) names a bad vertex or has a bad value.
     #[error("option angle_sums, entry {entry} (vertex {vertex}, sum {value}): {reason}")]
     AngleSum { entry: usize, vertex: u64, value: f64, reason: String },
+    /// A triple of the render triangulation (`triangles`) names a bad corner, mixes faces, or
+    /// its face is not covered by exactly `corners − 2` triangles.
+    #[error("triangles[{triangle}] {corners:?}: {reason}")]
+    RenderTriangle { triangle: usize, corners: [u64; 3], reason: String },
 }
 
 /// Result alias used throughout the crate.

@@ -2,7 +2,7 @@
 
 use rayon::prelude::*;
 
-use crate::charts::{build_charts, Chart};
+use crate::charts::{build_charts_with, Chart, FaceTriangulation};
 use crate::error::{Result, UvError};
 use crate::mesh::PolyMesh;
 use crate::methods::{self, ChartFailure, Method};
@@ -25,6 +25,17 @@ pub struct MeshInput<'a> {
     pub selected: Option<&'a [bool]>,
     /// Pinned corners with the UV they must keep. Default: none.
     pub pins: &'a [(u32, [f64; 2])],
+    /// Render triangulation: corner index triples (Blender's `mesh.loop_triangles`), which
+    /// faces of four or more corners are split by (see [`FaceTriangulation`]). Default: none
+    /// (the core splits n-gons itself). Quads are kept and measured convex either way.
+    pub triangles: &'a [[u32; 3]],
+}
+
+impl Default for MeshInput<'_> {
+    /// An empty mesh with no seams, pins or render triangles and every face selected.
+    fn default() -> Self {
+        MeshInput { positions: &[], corner_verts: &[], face_sizes: &[], seams: &[], selected: None, pins: &[], triangles: &[] }
+    }
 }
 
 /// Where each solved chart is placed in UV space.
@@ -205,7 +216,8 @@ pub fn unwrap(input: &MeshInput<'_>, options: &UnwrapOptions) -> Result<Unwrappe
     // practice are faster sequential than split across threads.
     faer::set_global_parallelism(faer::Par::Seq);
 
-    let charts = build_charts(&mesh, input.seams, input.selected);
+    let render = if input.triangles.is_empty() { None } else { Some(FaceTriangulation::new(&mesh, input.triangles)?) };
+    let charts = build_charts_with(&mesh, input.seams, input.selected, render.as_ref());
     let mut pin_of_corner: Vec<Option<[f64; 2]>> = vec![None; n_corners];
     for &(c, uv) in input.pins {
         pin_of_corner[c as usize] = Some(uv);
@@ -283,7 +295,7 @@ fn solve_chart(
     if pins.is_empty() {
         place_chart(chart, &mut solution.uv, &options.fit);
     }
-    let m = metrics::chart_metrics(&chart.positions, &chart.triangles, &solution.uv, &chart.boundary_loops);
+    let m = metrics::chart_metrics_with_quads(&chart.positions, &chart.triangles, &chart.quads, &solution.uv, &chart.boundary_loops);
     report.flips = m.flips;
     report.overlap = m.overlap;
     report.distortion = m.distortion;

@@ -10,8 +10,10 @@
 //! side, a seam that ends inside a chart becomes a slit, and a "bow-tie" vertex shared by two
 //! fans becomes two chart vertices.
 
+mod render;
 mod triangulate;
 
+pub use render::FaceTriangulation;
 pub use triangulate::{triangulate_polygon, triangulate_polygon_avoiding, triangulate_polygon_with};
 
 use std::collections::{HashMap, HashSet};
@@ -34,6 +36,9 @@ pub struct Chart {
     pub triangles: Vec<[u32; 3]>,
     /// Input face of every triangle.
     pub triangle_face: Vec<u32>,
+    /// The chart's quad faces: a quad is flip-free only if it is strictly convex in UV, i.e.
+    /// positive on both of its diagonal splits (exporters and engines pick their own).
+    pub quads: Vec<Quad>,
     /// Boundary loops, each oriented with the chart on its left (counter-clockwise for the
     /// outer loop of a well-oriented map).
     pub boundary_loops: Vec<Vec<u32>>,
@@ -45,7 +50,56 @@ pub struct Chart {
     pub defect: Option<String>,
 }
 
+/// A quad face of a chart: its chart vertices in face order and its two triangles.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Quad {
+    /// Chart vertices in the face's winding order.
+    pub vertices: [u32; 4],
+    /// Indices into [`Chart::triangles`] of the quad's own split.
+    pub triangles: [u32; 2],
+}
+
+impl Quad {
+    /// The two triangles of the split the chart does not use (the other diagonal), oriented
+    /// like the face. `own` is the chart's triangle list.
+    pub fn other_split(&self, own: &[[u32; 3]]) -> [[u32; 3]; 2] {
+        let [a, b, c, d] = self.vertices;
+        let t = own[self.triangles[0] as usize];
+        if t.contains(&a) && t.contains(&c) {
+            [[a, b, d], [b, c, d]]
+        } else {
+            [[a, b, c], [a, c, d]]
+        }
+    }
+
+    /// Both splits' four triangles: `(a, b, c), (a, c, d), (a, b, d), (b, c, d)`; all four are
+    /// positive exactly when the quad is strictly convex with the chart's orientation.
+    pub fn all_splits(&self) -> [[u32; 3]; 4] {
+        let [a, b, c, d] = self.vertices;
+        [[a, b, c], [a, c, d], [a, b, d], [b, c, d]]
+    }
+}
+
 impl Chart {
+    /// The chart's triangles followed by the other diagonal's two triangles of every quad,
+    /// and a weight per triangle (1, or ½ for the four triangles of a quad, so each quad
+    /// weighs its area once): what a barrier method keeps positive so that quads stay
+    /// strictly convex. Without quads, the chart's triangles with weight 1.
+    pub fn triangles_both_splits(&self) -> (Vec<[u32; 3]>, Vec<f64>) {
+        let mut tris = self.triangles.clone();
+        let mut w = vec![1.0; tris.len()];
+        for q in &self.quads {
+            for &t in &q.triangles {
+                w[t as usize] = 0.5;
+            }
+            for t in q.other_split(&self.triangles) {
+                tris.push(t);
+                w.push(0.5);
+            }
+        }
+        (tris, w)
+    }
+
     /// Average pinned UV per chart vertex that has a pinned corner.
     pub fn vertex_pins(&self, pin_of_corner: &[Option<[f64; 2]>]) -> Vec<(u32, [f64; 2])> {
         let mut acc: HashMap<u32, ([f64; 2], u32)> = HashMap::new();
@@ -156,6 +210,20 @@ fn edge_key(a: u32, b: u32) -> u64 {
 /// Charts are numbered by their smallest face index. Never fails: problems of a single chart
 /// (non-orientable, non-manifold vertex) are recorded in [`Chart::defect`].
 pub fn build_charts(mesh: &PolyMesh<'_>, seams: &[[u32; 2]], selected: Option<&[bool]>) -> Vec<Chart> {
+    build_charts_with(mesh, seams, selected, None)
+}
+
+/// [`build_charts`] with the render triangulation of the faces (see [`FaceTriangulation`]):
+/// faces of four or more corners are split the way it says instead of by ear clipping, except
+/// where its diagonal already is an edge of the chart (two faces around a vertex shared by
+/// only two faces), which would make the chart fold onto itself; such a face keeps the core's
+/// own split (for quads the metrics and methods look at both diagonals anyway).
+pub fn build_charts_with(
+    mesh: &PolyMesh<'_>,
+    seams: &[[u32; 2]],
+    selected: Option<&[bool]>,
+    render: Option<&FaceTriangulation>,
+) -> Vec<Chart> {
     let n_faces = mesh.n_faces();
     let n_corners = mesh.n_corners();
     let is_sel = |f: usize| selected.is_none_or(|s| s[f]);
@@ -226,10 +294,16 @@ pub fn build_charts(mesh: &PolyMesh<'_>, seams: &[[u32; 2]], selected: Option<&[
     let corner_root: Vec<u32> = (0..n_corners as u32).map(|c| corner_uf.find(c)).collect();
 
     use rayon::prelude::*;
-    chart_faces.into_par_iter().map(|faces| make_chart(mesh, faces, &corner_root, &joined)).collect()
+    chart_faces.into_par_iter().map(|faces| make_chart(mesh, faces, &corner_root, &joined, render)).collect()
 }
 
-fn make_chart(mesh: &PolyMesh<'_>, faces: Vec<u32>, corner_root: &[u32], joined: &[bool]) -> Chart {
+fn make_chart(
+    mesh: &PolyMesh<'_>,
+    faces: Vec<u32>,
+    corner_root: &[u32],
+    joined: &[bool],
+    render: Option<&FaceTriangulation>,
+) -> Chart {
     let positions_in = mesh.positions();
     let mut local_of_root: HashMap<u32, u32> = HashMap::new();
     let mut mesh_vertex = Vec::new();
@@ -237,6 +311,7 @@ fn make_chart(mesh: &PolyMesh<'_>, faces: Vec<u32>, corner_root: &[u32], joined:
     let mut corner_vertex = Vec::new();
     let mut triangles = Vec::new();
     let mut triangle_face = Vec::new();
+    let mut quads = Vec::new();
     // Boundary half-edges (chart vertex a → b): polygon edges not joined to another face.
     let mut boundary_edges: Vec<(u32, u32)> = Vec::new();
     // First pass: chart vertices of every corner, and the chart's polygon edges.
@@ -295,8 +370,25 @@ fn make_chart(mesh: &PolyMesh<'_>, faces: Vec<u32>, corner_root: &[u32], joined:
         }
         poly_pts.clear();
         poly_pts.extend(r.map(|c| positions_in[mesh.corner_vert(c) as usize]));
-        let through = if m == 4 { (0..4).find(|&k| valence[local[k] as usize] == 2) } else { None };
-        let tris = triangulate_polygon_with(&poly_pts, |i, j| edges.contains(&ukey(local[i], local[j])), through);
+        let given: Option<Vec<[usize; 3]>> = render.and_then(|r| {
+            let tris: Vec<[usize; 3]> =
+                r.face(f as usize).iter().map(|t| [t[0] as usize, t[1] as usize, t[2] as usize]).collect();
+            let taken = tris.iter().any(|t| {
+                (0..3).any(|k| {
+                    let (i, j) = (t[k], t[(k + 1) % 3]);
+                    (i + 1) % m != j && (j + 1) % m != i && edges.contains(&ukey(local[i], local[j]))
+                })
+            });
+            (!taken).then_some(tris)
+        });
+        let tris = given.unwrap_or_else(|| {
+            let through = if m == 4 { (0..4).find(|&k| valence[local[k] as usize] == 2) } else { None };
+            triangulate_polygon_with(&poly_pts, |i, j| edges.contains(&ukey(local[i], local[j])), through)
+        });
+        if m == 4 && tris.len() == 2 {
+            let n = triangles.len() as u32;
+            quads.push(Quad { vertices: [local[0], local[1], local[2], local[3]], triangles: [n, n + 1] });
+        }
         for t in tris {
             for k in 0..3 {
                 let (i, j) = (t[k], t[(k + 1) % 3]);
@@ -384,6 +476,7 @@ fn make_chart(mesh: &PolyMesh<'_>, faces: Vec<u32>, corner_root: &[u32], joined:
         positions,
         triangles,
         triangle_face,
+        quads,
         boundary_loops,
         genus,
         kind,

@@ -4,13 +4,16 @@
 //! its plane) to its UV triangle, with singular values σ1 ≥ σ2. Before measuring, each chart's
 //! UVs are scaled so its UV area equals its 3D area. Weights are 3D areas over the total.
 //! * flips: triangles whose signed UV area has the opposite sign to the chart's majority,
-//!   plus zero-area UV triangles;
+//!   plus zero-area UV triangles ([`is_flipped`]). The triangles are the render triangulation
+//!   when one is given (else the core's own), and a quad counts as folded when either of its
+//!   two diagonal splits has such a triangle: exporters and engines choose their own diagonal,
+//!   so a flip-free quad is a strictly convex UV quad;
 //! * overlap: the chart's UV boundary crosses or touches itself;
 //! * conformal Σ w σ1/σ2; area Σ w max(σ1σ2, 1/(σ1σ2)); symmetric Dirichlet
 //!   Σ w (σ1² + σ2² + σ1⁻² + σ2⁻²)/4. All are 1 for an isometry; a zero-area UV triangle with
 //!   positive 3D area makes them infinite.
 
-use crate::charts::build_charts;
+use crate::charts::{build_charts_with, FaceTriangulation, Quad};
 use crate::error::{Result, UvError};
 use crate::geometry::{cross2, local_frame, signed_area_2d, triangle_area};
 use crate::mesh::PolyMesh;
@@ -75,23 +78,71 @@ pub fn singular_values_2x2(a: f64, b: f64, c: f64, d: f64) -> (f64, f64, f64) {
     (q + r, (q - r).abs(), det.signum())
 }
 
-/// Whether a UV triangle is degenerate (its area is at round-off level of its edges).
+/// The one flip predicate: a UV triangle is flipped (or degenerate) when its doubled signed
+/// area, taken with the chart's orientation (positive for a well-oriented triangle), is not
+/// above round-off level of `scale`, the product of two of its edge lengths (`|e1| |e2|`,
+/// the largest the doubled area can be). Every flip count in the crate goes through here.
 #[inline]
-pub fn uv_degenerate(q: [[f64; 2]; 3]) -> bool {
-    let e1 = [q[1][0] - q[0][0], q[1][1] - q[0][1]];
-    let e2 = [q[2][0] - q[0][0], q[2][1] - q[0][1]];
-    let c = cross2(e1, e2).abs();
-    let l = (e1[0].hypot(e1[1])) * (e2[0].hypot(e2[1]));
-    c <= 1e-12 * l || l == 0.0
+pub fn is_flipped(signed_area: f64, scale: f64) -> bool {
+    !(signed_area > 1e-12 * scale) || scale == 0.0
 }
 
-/// Measure one chart given per-vertex positions and UVs over its triangles.
+/// Doubled signed area and scale (`|e1| |e2|`) of a UV triangle, for [`is_flipped`].
+#[inline]
+fn area_and_scale(q: [[f64; 2]; 3]) -> (f64, f64) {
+    let e1 = [q[1][0] - q[0][0], q[1][1] - q[0][1]];
+    let e2 = [q[2][0] - q[0][0], q[2][1] - q[0][1]];
+    (cross2(e1, e2), (e1[0].hypot(e1[1])) * (e2[0].hypot(e2[1])))
+}
+
+/// Whether a UV triangle is degenerate (its area is at round-off level of its edges), in
+/// either orientation.
+#[inline]
+pub fn uv_degenerate(q: [[f64; 2]; 3]) -> bool {
+    let (c, l) = area_and_scale(q);
+    is_flipped(c.abs(), l)
+}
+
+/// Number of folded triangles of one quad with `orientation` (+1 or −1): the larger count
+/// of flipped triangles ([`is_flipped`]) over its two diagonal splits; 0 exactly when the UV
+/// quad is strictly convex with that orientation.
+pub fn quad_folds(q: &Quad, uv: &[[f64; 2]], orientation: f64) -> usize {
+    let t = q.all_splits();
+    let f = |k: usize| {
+        let (a, l) = area_and_scale([uv[t[k][0] as usize], uv[t[k][1] as usize], uv[t[k][2] as usize]]);
+        is_flipped(orientation * a, l) as usize
+    };
+    (f(0) + f(1)).max(f(2) + f(3))
+}
+
+/// Measure one chart given per-vertex positions and UVs over its triangles (no quads: every
+/// triangle counts on its own; see [`chart_metrics_with_quads`]).
 pub fn chart_metrics(
     positions: &[[f64; 3]],
     triangles: &[[u32; 3]],
     uv: &[[f64; 2]],
     boundary_loops: &[Vec<u32>],
 ) -> ChartMetrics {
+    chart_metrics_with_quads(positions, triangles, &[], uv, boundary_loops)
+}
+
+/// Measure one chart given per-vertex positions and UVs over its triangles, with its quad
+/// faces (whose two triangles are among `triangles`): the flips of a quad are counted by
+/// [`quad_folds`] (both diagonal splits) instead of from its own two triangles. Distortion is
+/// measured on `triangles`.
+pub fn chart_metrics_with_quads(
+    positions: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    quads: &[Quad],
+    uv: &[[f64; 2]],
+    boundary_loops: &[Vec<u32>],
+) -> ChartMetrics {
+    let mut in_quad = vec![false; if quads.is_empty() { 0 } else { triangles.len() }];
+    for q in quads {
+        for &t in &q.triangles {
+            in_quad[t as usize] = true;
+        }
+    }
     let get3 = |t: &[u32; 3]| [positions[t[0] as usize], positions[t[1] as usize], positions[t[2] as usize]];
     let get2 = |t: &[u32; 3]| [uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]];
     let mut area3 = 0.0;
@@ -112,11 +163,11 @@ pub fn chart_metrics(
     let scale = if area2 > 0.0 { (area3 / area2).sqrt() } else { 1.0 };
     let mut flips = 0usize;
     let mut sum = [0.0f64; 3];
-    for t in triangles {
+    for (ti, t) in triangles.iter().enumerate() {
         let q2 = get2(t);
-        let a = signed_area_2d(q2);
-        let degenerate = uv_degenerate(q2);
-        if degenerate || a * majority < 0.0 {
+        let (a, l) = area_and_scale(q2);
+        let degenerate = is_flipped(a.abs(), l);
+        if is_flipped(majority * a, l) && !in_quad.get(ti).copied().unwrap_or(false) {
             flips += 1;
         }
         let p = get3(t);
@@ -151,6 +202,7 @@ pub fn chart_metrics(
             sum = [f64::INFINITY; 3];
         }
     }
+    flips += quads.iter().map(|q| quad_folds(q, uv, majority)).sum::<usize>();
     if !(area3 > 0.0) {
         // No 3D area: distortion is undefined, not perfect.
         sum = [f64::NAN; 3];
@@ -364,7 +416,25 @@ pub fn measure(
     uv: &[[f64; 2]],
     selected: Option<&[bool]>,
 ) -> Result<MeshMetrics> {
+    measure_with_triangles(positions, corner_verts, face_sizes, uv, selected, &[])
+}
+
+/// [`measure`] with the render triangulation (`triangles`: corner index triples, Blender's
+/// `mesh.loop_triangles`; empty for the core's own): n-gons are measured on those triangles,
+/// and quads on both diagonal splits either way.
+///
+/// Errors: those of [`measure`], and [`UvError::RenderTriangle`] for a bad triple (see
+/// [`FaceTriangulation::new`]).
+pub fn measure_with_triangles(
+    positions: &[[f64; 3]],
+    corner_verts: &[u32],
+    face_sizes: &[u32],
+    uv: &[[f64; 2]],
+    selected: Option<&[bool]>,
+    triangles: &[[u32; 3]],
+) -> Result<MeshMetrics> {
     let mesh = PolyMesh::new(positions, corner_verts, face_sizes)?;
+    let render = if triangles.is_empty() { None } else { Some(FaceTriangulation::new(&mesh, triangles)?) };
     if uv.len() != mesh.n_corners() {
         return Err(UvError::Shape {
             what: "uv",
@@ -422,7 +492,7 @@ pub fn measure(
         }
         i = j;
     }
-    let charts = build_charts(&mesh, &seams, selected);
+    let charts = build_charts_with(&mesh, &seams, selected, render.as_ref());
     let per_chart: Vec<ChartMetrics> = {
         use rayon::prelude::*;
         charts
@@ -432,7 +502,7 @@ pub fn measure(
                 for &(c, v) in &ch.corner_vertex {
                     vuv[v as usize] = uv[c as usize];
                 }
-                let mut m = chart_metrics(&ch.positions, &ch.triangles, &vuv, &ch.boundary_loops);
+                let mut m = chart_metrics_with_quads(&ch.positions, &ch.triangles, &ch.quads, &vuv, &ch.boundary_loops);
                 m.faces = ch.faces.len();
                 m
             })
