@@ -166,6 +166,7 @@ def _solve(core, job: _Job, method, options, use_fit):
         job.face_sizes.astype(np.int64),
         method=method,
         selected=job.selected,
+        triangles=mesh_io.read_loop_triangles(job.obj.data),
         **kwargs,
     )
 

@@ -37,7 +37,10 @@ pub struct Chart {
     /// Input face of every triangle.
     pub triangle_face: Vec<u32>,
     /// The chart's quad faces: a quad is flip-free only if it is strictly convex in UV, i.e.
-    /// positive on both of its diagonal splits (exporters and engines pick their own).
+    /// positive on both of its diagonal splits (exporters and engines pick their own). Quads
+    /// with a corner at a vertex inside the chart shared by only two faces are left out (one
+    /// of its two corner angles is at least π, so convexity is impossible): they count as
+    /// their own two triangles, like n-gons.
     pub quads: Vec<Quad>,
     /// Boundary loops, each oriented with the chart on its left (counter-clockwise for the
     /// outer loop of a well-oriented map).
@@ -385,7 +388,10 @@ fn make_chart(
             let through = if m == 4 { (0..4).find(|&k| valence[local[k] as usize] == 2) } else { None };
             triangulate_polygon_with(&poly_pts, |i, j| edges.contains(&ukey(local[i], local[j])), through)
         });
-        if m == 4 && tris.len() == 2 {
+        // A vertex inside the chart shared by only two faces has its two corner angles sum to
+        // 2π, so one of them is at least π: such quads cannot be strictly convex and keep
+        // only their own split (split through that vertex, see above).
+        if m == 4 && tris.len() == 2 && local.iter().all(|&v| valence[v as usize] != 2) {
             let n = triangles.len() as u32;
             quads.push(Quad { vertices: [local[0], local[1], local[2], local[3]], triangles: [n, n + 1] });
         }

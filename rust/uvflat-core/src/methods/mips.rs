@@ -28,6 +28,10 @@
 //! * step: [`flip_free_line_search`] (largest step keeping every triangle positive, then
 //!   halving until E decreases), so no triangle ever flips and E decreases monotonically.
 //!
+//! Quads: the energy and the line search also cover the other diagonal's two triangles of
+//! every quad ([`super::barrier_triangles`]), so quads stay strictly convex; an LSCM start
+//! with a non-convex quad is not used.
+//!
 //! Pins: the energy does not see them; the result is moved onto the pins by the least-squares
 //! similarity (exact for one or two pins) and the report says so.
 //!

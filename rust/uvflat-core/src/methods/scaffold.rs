@@ -51,6 +51,9 @@
 //! (Floater 2003; an embedding by Tutte's theorem), each scaled by the energy-optimal factor.
 //! Valid: every triangle positive, no boundary self-overlap, and a scaffold can be built.
 //!
+//! Quads: the chart energy and the line search also cover the other diagonal's two triangles
+//! of every quad ([`super::barrier_triangles`]), so quads stay strictly convex.
+//!
 //! Guarantee: all chart and scaffold triangles stay positively oriented and the box boundary is
 //! fixed, so chart ∪ scaffold stays an embedded triangulation of the box (a locally injective
 //! map of a disk onto a convex polygon's interior with the boundary fixed is injective):

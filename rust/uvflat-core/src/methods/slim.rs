@@ -33,6 +33,11 @@
 //! Without pins (or with pins that do not span more than a point) the start is scaled by the
 //! energy-optimal factor `(Σ A ‖J⁻¹‖² / Σ A ‖J‖²)^{1/4}` and translated onto the pin.
 //!
+//! Quads: the energy and the line search also cover the other diagonal's two triangles of
+//! every quad ([`super::barrier_triangles`], each of a quad's four triangles at half weight),
+//! so quads stay strictly convex whichever diagonal an exporter picks; starts are ranked by
+//! their number of non-convex quads first.
+//!
 //! Guarantee: every triangle of the result is positively oriented (the start is checked and
 //! every accepted step keeps it so); the energy history is strictly decreasing.
 //!
