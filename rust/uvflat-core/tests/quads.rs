@@ -191,3 +191,20 @@ fn the_render_split_is_used_and_methods_stay_convex_under_it() {
         assert_eq!(measured.flips, 0, "{method}");
     }
 }
+
+#[test]
+fn abf_repairs_its_few_non_convex_quads_in_place() {
+    let (soup, seams) = curved_quad_grid(24, 0x9e37_79b9_7f4a_7c15);
+    let r = run(&soup, &seams, "abf");
+    assert_eq!(nonconvex_quads(&soup, &r.uv, &r.face_chart), 0);
+    for c in &r.charts {
+        assert_eq!(c.status, uvflat_core::ChartStatus::Solved, "{:?}", c.reason);
+        assert_eq!(c.method, "abf");
+    }
+    // The repair had something to do on this surface (else this test checks nothing).
+    assert!(
+        r.charts.iter().any(|c| c.reason.as_deref().is_some_and(|n| n.contains("made strictly convex"))),
+        "{:?}",
+        r.charts.iter().map(|c| &c.reason).collect::<Vec<_>>()
+    );
+}

@@ -42,6 +42,9 @@ pub struct Chart {
     /// of its two corner angles is at least π, so convexity is impossible): they count as
     /// their own two triangles, like n-gons.
     pub quads: Vec<Quad>,
+    /// Faces of four or more corners as polygons (quads included, with the same exception):
+    /// the polygon graph of the barycentric methods, on which faces come out convex.
+    pub polygons: Vec<Polygon>,
     /// Boundary loops, each oriented with the chart on its left (counter-clockwise for the
     /// outer loop of a well-oriented map).
     pub boundary_loops: Vec<Vec<u32>>,
@@ -60,6 +63,15 @@ pub struct Quad {
     pub vertices: [u32; 4],
     /// Indices into [`Chart::triangles`] of the quad's own split.
     pub triangles: [u32; 2],
+}
+
+/// A face of four or more corners: its chart vertices in face order and its triangles.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Polygon {
+    /// Chart vertices in the face's winding order.
+    pub vertices: Vec<u32>,
+    /// Indices into [`Chart::triangles`] of the face's triangles.
+    pub triangles: std::ops::Range<u32>,
 }
 
 impl Quad {
@@ -315,6 +327,7 @@ fn make_chart(
     let mut triangles = Vec::new();
     let mut triangle_face = Vec::new();
     let mut quads = Vec::new();
+    let mut polygons = Vec::new();
     // Boundary half-edges (chart vertex a → b): polygon edges not joined to another face.
     let mut boundary_edges: Vec<(u32, u32)> = Vec::new();
     // First pass: chart vertices of every corner, and the chart's polygon edges.
@@ -373,7 +386,11 @@ fn make_chart(
         }
         poly_pts.clear();
         poly_pts.extend(r.map(|c| positions_in[mesh.corner_vert(c) as usize]));
-        let given: Option<Vec<[usize; 3]>> = render.and_then(|r| {
+        // A quad at a vertex inside the chart shared by only two faces is split through that
+        // vertex whatever the render triangulation says (see `through` below): no flat map
+        // keeps the other split positive there.
+        let two_face = m == 4 && local.iter().any(|&v| valence[v as usize] == 2);
+        let given: Option<Vec<[usize; 3]>> = render.filter(|_| !two_face).and_then(|r| {
             let tris: Vec<[usize; 3]> =
                 r.face(f as usize).iter().map(|t| [t[0] as usize, t[1] as usize, t[2] as usize]).collect();
             let taken = tris.iter().any(|t| {
@@ -391,7 +408,11 @@ fn make_chart(
         // A vertex inside the chart shared by only two faces has its two corner angles sum to
         // 2π, so one of them is at least π: such quads cannot be strictly convex and keep
         // only their own split (split through that vertex, see above).
-        if m == 4 && tris.len() == 2 && local.iter().all(|&v| valence[v as usize] != 2) {
+        if tris.len() == m - 2 && local.iter().all(|&v| valence[v as usize] != 2) {
+            let n = triangles.len() as u32;
+            polygons.push(Polygon { vertices: local.to_vec(), triangles: n..n + (m - 2) as u32 });
+        }
+        if m == 4 && tris.len() == 2 && !two_face {
             let n = triangles.len() as u32;
             quads.push(Quad { vertices: [local[0], local[1], local[2], local[3]], triangles: [n, n + 1] });
         }
@@ -483,6 +504,7 @@ fn make_chart(
         triangles,
         triangle_face,
         quads,
+        polygons,
         boundary_loops,
         genus,
         kind,

@@ -10,6 +10,7 @@ pub mod harmonic;
 pub mod lscm;
 pub mod mean_value;
 pub mod mips;
+pub mod quad_repair;
 pub mod scaffold;
 pub mod slim;
 pub mod spectral;
@@ -359,18 +360,39 @@ pub fn barrier_triangles(chart: &Chart, uv: &[[f64; 2]]) -> (Vec<[u32; 3]>, Vec<
 
 /// Post-check of a method that promises no flips but has no barrier for quads (ABF: its
 /// angles are per triangle, so a quad's corner may exceed π): if `sol` leaves a quad of the
-/// chart non-convex, the chart is re-solved by SLIM, whose barrier covers both diagonal
-/// splits of every quad and whose start (the mean value map on the polygon graph) has convex
-/// quads; the report marks it as a fallback and says why. A solution that already fell back
-/// (to LSCM, which promises nothing) is left alone, and so is one SLIM cannot improve on.
+/// chart non-convex, first [`quad_repair::repair_quads`] moves the few vertices involved
+/// (never flipping anything; pinned vertices and `fixed` ones stay) and the note says so;
+/// if quads are still not convex, the chart is re-solved by SLIM, whose barrier covers both
+/// diagonal splits of every quad and whose start (the mean value map on the polygon graph)
+/// has convex quads; the report marks it as a fallback and says why. A solution that already
+/// fell back (to LSCM, which promises nothing) is left alone, and so is one SLIM cannot
+/// improve on.
 pub fn convex_quads_or_slim(
     chart: &Chart,
     pins: &[(u32, [f64; 2])],
-    sol: ChartSolution,
+    mut sol: ChartSolution,
     method: &str,
+    mut fixed: Vec<bool>,
 ) -> std::result::Result<ChartSolution, ChartFailure> {
     let bad = nonconvex_quads(chart, &sol.uv);
     if bad == 0 || sol.fallback.is_some() {
+        return Ok(sol);
+    }
+    if !pins.is_empty() {
+        fixed.resize(chart.positions.len(), false);
+        for &(v, _) in pins {
+            fixed[v as usize] = true;
+        }
+    }
+    let mut repaired_uv = sol.uv.clone();
+    let (left, moved) = quad_repair::repair_quads(chart, &mut repaired_uv, &fixed);
+    if left == 0 {
+        sol.uv = repaired_uv;
+        let note = format!("{bad} quad(s) non-convex after {method} made strictly convex by moving {moved} vertex(es)");
+        sol.note = Some(match sol.note.take() {
+            Some(n) => format!("{n}; {note}"),
+            None => note,
+        });
         return Ok(sol);
     }
     let repaired = match slim::solve(chart, pins, &slim::SlimOptions::default()) {
@@ -414,7 +436,17 @@ pub fn solve(method: &Method, chart: &Chart, pins: &[(u32, [f64; 2])]) -> std::r
         Method::MeanValue { boundary } => mean_value::solve(chart, pins, *boundary),
         Method::Lscm => lscm::solve(chart, pins),
         Method::Spectral(o) => spectral::solve(chart, pins, o),
-        Method::Abf(o) => abf::solve(chart, pins, o).and_then(|sol| convex_quads_or_slim(chart, pins, sol, "ABF")),
+        Method::Abf(o) => abf::solve(chart, pins, o).and_then(|sol| {
+            // A convex outline stays put: its vertices do not move (holes' may).
+            let mut fixed = Vec::new();
+            if o.boundary == abf::AbfBoundary::Convex {
+                fixed = vec![false; chart.positions.len()];
+                for &v in chart.outer_loop().map(|l| &chart.boundary_loops[l][..]).unwrap_or(&[]) {
+                    fixed[v as usize] = true;
+                }
+            }
+            convex_quads_or_slim(chart, pins, sol, "ABF", fixed)
+        }),
         Method::Arap(o) => arap::solve(chart, pins, o),
         Method::Slim(o) => slim::solve(chart, pins, o),
         Method::Mips(o) => mips::solve(chart, pins, o),
