@@ -208,3 +208,81 @@ fn abf_repairs_its_few_non_convex_quads_in_place() {
         r.charts.iter().map(|c| &c.reason).collect::<Vec<_>>()
     );
 }
+
+/// A brick wall of hexagons (pairs of grid quads merged, rows offset), noisy and curved, with
+/// some middle vertices pushed across their hexagon: concave n-gons in 3D.
+fn brick_hexagons(n: usize, seed: u64) -> common::Soup {
+    let mut rng = Rng(seed);
+    let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
+    let h = 2.0 / n as f64;
+    let mut positions = Vec::new();
+    for j in 0..=n {
+        for i in 0..=n {
+            let (mut x, mut y) = (i as f64 * h - 1.0, j as f64 * h - 1.0);
+            x += 0.3 * h * (rng.next() - 0.5);
+            y += 0.3 * h * (rng.next() - 0.5);
+            if i > 0 && j > 0 && i < n && j < n && (5 * i + 3 * j) % 7 == 0 {
+                y += 0.7 * h;
+            }
+            positions.push([x, y, 0.5 * (x * x - y * y) + 0.2 * (3.0 * x).sin()]);
+        }
+    }
+    let (mut corner_verts, mut face_sizes) = (Vec::new(), Vec::new());
+    for j in 0..n {
+        let mut i = 0;
+        if j % 2 == 1 {
+            corner_verts.extend([id(0, j), id(1, j), id(1, j + 1), id(0, j + 1)]);
+            face_sizes.push(4);
+            i = 1;
+        }
+        while i < n {
+            if i + 2 <= n {
+                corner_verts.extend([id(i, j), id(i + 1, j), id(i + 2, j), id(i + 2, j + 1), id(i + 1, j + 1), id(i, j + 1)]);
+                face_sizes.push(6);
+                i += 2;
+            } else {
+                corner_verts.extend([id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)]);
+                face_sizes.push(4);
+                i += 1;
+            }
+        }
+    }
+    common::Soup { positions, corner_verts, face_sizes }
+}
+
+/// Faces whose UV polygon is not strictly convex (some corner does not turn left, with the
+/// chart's orientation).
+fn nonconvex_faces(soup: &common::Soup, uv: &[[f64; 2]]) -> usize {
+    let cross = |a: [f64; 2], b: [f64; 2], c: [f64; 2]| (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+    let mut total = 0.0;
+    let mut start = 0;
+    for &s in &soup.face_sizes {
+        let q = &uv[start..start + s as usize];
+        total += (1..q.len() - 1).map(|k| cross(q[0], q[k], q[k + 1])).sum::<f64>();
+        start += s as usize;
+    }
+    let o = total.signum();
+    let mut bad = 0;
+    let mut start = 0;
+    for &s in &soup.face_sizes {
+        let m = s as usize;
+        let q = &uv[start..start + m];
+        if (0..m).any(|k| !(o * cross(q[(k + m - 1) % m], q[k], q[(k + 1) % m]) > 0.0)) {
+            bad += 1;
+        }
+        start += m;
+    }
+    bad
+}
+
+#[test]
+fn barycentric_methods_make_every_ngon_convex() {
+    let soup = brick_hexagons(16, 0x2545_f491_4f6c_dd1d);
+    let lscm = run(&soup, &[], "lscm");
+    assert!(nonconvex_faces(&soup, &lscm.uv) > 0, "the test surface should give LSCM concave faces");
+    for method in ["tutte", "mean_value"] {
+        let r = run(&soup, &[], method);
+        assert_eq!(nonconvex_faces(&soup, &r.uv), 0, "{method}");
+        assert_eq!(r.charts.iter().map(|c| c.flips).sum::<usize>(), 0, "{method}");
+    }
+}
