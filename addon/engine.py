@@ -166,6 +166,7 @@ class _Job:
     raw_selected: np.ndarray | None = None
     avoid: np.ndarray | None = None        # vertex indices where seams must not go
     old_seams: np.ndarray | None = None    # (E,) seam flags before marking new seams
+    triangles: np.ndarray | None = None    # (T,3) Blender's render triangles (corner triples)
     seams: np.ndarray | None = None  # (S,2) seam vertex pairs
     quality: dict | None = None      # distortion attributes as they were before writing
     aspect: float = 1.0              # width / height of the texture (correct aspect)
@@ -218,6 +219,8 @@ def _read(obj) -> _Job:
     job = _Job(obj, positions, corner_verts, face_sizes, selected, uv_name, old_uv, pins)
     job.raw_selected = raw_selected
     job.seams = mesh_io.read_seams(mesh)
+    # read here, on the main thread: the solve may run on a worker thread
+    job.triangles = mesh_io.read_loop_triangles(mesh)
     return job
 
 
@@ -287,6 +290,7 @@ def _solve(core, job: _Job, method, options, use_fit, progress=None):
         job.face_sizes.astype(np.int64),
         method=method,
         selected=job.selected,
+        triangles=job.triangles,
         **kwargs,
     )
 

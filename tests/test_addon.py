@@ -238,8 +238,9 @@ def check_result(ext, obj, summary, expect_all_solved=True, expect_no_flips=True
     chart = np.where(solved, np.asarray(result.chart), -1)
     import uvflat
 
+    # Measured on the triangles Blender renders (DESIGN: n-gons by loop_triangles).
     metrics = uvflat.metrics(data.positions, data.corner_verts, data.face_sizes, data.uv,
-                             selected=solved)
+                             selected=solved, triangles=ext.mesh_io.read_loop_triangles(obj.data))
     if expect_no_flips:
         assert flipped_triangles(data, chart) == 0, f"{obj.name}: flipped faces; {summary.line()}"
         assert metrics.flips == 0, f"{obj.name}: uvflat.metrics counts {metrics.flips} flips"
@@ -296,9 +297,10 @@ def test_suzanne_seams_and_no_flips(ext, scene, method, options):
     result, summary = unwrap(ext, [obj], method=method, **options)
     assert result == {"FINISHED"}
     assert summary.charts >= 2, summary.line()
-    # every chart solved; no flips (for lscm too: the quads around Suzanne's valence-2 vertices
-    # are split through them, so flattening opens no sliver); UV jumps exactly at seams
-    check_result(ext, obj, summary)
+    # every chart solved; no flips (the quads around Suzanne's valence-2 vertices are split
+    # through them, so flattening opens no sliver); lscm promises nothing and folds a couple of
+    # quads on one diagonal: its report must count them. UV jumps exactly at seams.
+    check_result(ext, obj, summary, expect_no_flips=(method != "lscm"))
 
 
 @pytest.mark.parametrize("method,options", FLIP_FREE + [("lscm", {})],
@@ -528,7 +530,9 @@ def test_creates_uv_map_when_missing(ext, scene):
     result, summary = unwrap(ext, [obj], method="tutte", boundary="square")
     assert result == {"FINISHED"}
     assert io.active_uv_name(obj.data) == "UVMap"
-    check_result(ext, obj, summary)
+    # A square boundary promises no flips: pentagons with three corners on one side of the
+    # square get a zero-area triangle in Blender's triangulation. The report must count them.
+    check_result(ext, obj, summary, expect_no_flips=False)
 
 
 def test_scene_defaults_panel_properties(ext, scene):
@@ -697,11 +701,13 @@ def _compare_with_blender(ext, obj, method, blender_method, metric):
     finally:
         common.object_mode()
     data = read(ext, obj)
-    theirs = uvflat.metrics(data.positions, data.corner_verts, data.face_sizes, data.uv)
+    # Both measured on the triangles Blender renders (DESIGN: n-gons by loop_triangles).
+    tris = ext.mesh_io.read_loop_triangles(obj.data)
+    theirs = uvflat.metrics(data.positions, data.corner_verts, data.face_sizes, data.uv, triangles=tris)
     result, summary = unwrap(ext, [obj], method=method, margin=0.001)
     assert result == {"FINISHED"} and not summary.failed, summary.line()
     data = read(ext, obj)
-    ours = uvflat.metrics(data.positions, data.corner_verts, data.face_sizes, data.uv)
+    ours = uvflat.metrics(data.positions, data.corner_verts, data.face_sizes, data.uv, triangles=tris)
     assert ours.charts == theirs.charts
     assert ours.flips <= theirs.flips, (ours.flips, theirs.flips)
     assert getattr(ours, metric) <= getattr(theirs, metric) + 1e-4, (
@@ -1335,3 +1341,141 @@ def test_phase_timings_cover_the_run(ext, scene, pack):
     assert all(t >= 0.0 for t in phases.values()), phases
     assert sum(phases.values()) <= summary.seconds + 1e-6, (phases, summary.seconds)
     assert phases["solve"] == pytest.approx(summary.solve_seconds, rel=1e-9, abs=1e-12)
+# Any triangulation: Blender's loop_triangles and the other diagonal of every quad
+
+# Methods that promise no flips, on any triangulation an exporter may pick.
+PROMISING = ["tutte", "mean_value", "slim", "mips", "scaffold", "abf"]
+
+
+def blender_folds(ext, obj, result):
+    """(flipped loop triangles, non-convex quads) of ``obj``'s UVs, measured here from
+    Blender's own ``loop_triangles`` and both diagonals of every quad, each chart with the
+    orientation of the majority of its triangles. Quads with a corner at a vertex inside a
+    chart shared by only two faces are left out: the two corner angles there sum to a full
+    turn, so one of the two quads cannot be convex (the core splits them through that
+    vertex; Blender may not)."""
+    data = read(ext, obj)
+    mesh = obj.data
+    mesh.calc_loop_triangles()
+    n_tri = len(mesh.loop_triangles)
+    loops = np.empty(3 * n_tri, dtype=np.int32)
+    mesh.loop_triangles.foreach_get("loops", loops)
+    loops = loops.reshape(-1, 3).astype(np.int64)
+    poly = np.empty(n_tri, dtype=np.int32)
+    mesh.loop_triangles.foreach_get("polygon_index", poly)
+    chart = np.asarray(result.chart)
+    solved = np.asarray(result.face_solved, dtype=bool)
+    uv = data.uv
+    fs = np.asarray(data.face_sizes, dtype=np.int64)
+    starts = np.concatenate([[0], np.cumsum(fs)[:-1]])
+    # Vertices on a mesh border or a seam are free to open up; count faces per vertex.
+    cv = data.corner_verts.astype(np.int64)
+    nxt = np.arange(len(cv)) + 1
+    nxt[starts + fs - 1] = starts
+    n_v = len(data.positions)
+    all_keys = np.minimum(cv, cv[nxt]) * n_v + np.maximum(cv, cv[nxt])
+    uniq, counts = np.unique(all_keys, return_counts=True)
+    border = uniq[counts != 2]
+    seam_keys = (np.minimum(data.seams[:, 0], data.seams[:, 1]).astype(np.int64) * n_v
+                 + np.maximum(data.seams[:, 0], data.seams[:, 1])) if len(data.seams) else np.zeros(0, np.int64)
+    open_keys = np.union1d(border, seam_keys)
+    on_open = np.zeros(n_v, dtype=bool)
+    on_open[(open_keys // n_v)] = True
+    on_open[(open_keys % n_v)] = True
+    faces_at = np.bincount(cv, minlength=n_v)
+    face_of = np.repeat(np.arange(len(fs)), fs)
+    exempt = np.zeros(len(fs), dtype=bool)
+    np.logical_or.at(exempt, face_of, (faces_at[cv] == 2) & ~on_open[cv])
+    exempt &= fs == 4
+    # Blender's triangles, each chart with its majority orientation.
+    area = _signed(uv, loops[:, 0], loops[:, 1], loops[:, 2])
+    tri_chart = np.where(solved[poly] & ~exempt[poly], chart[poly], -1)
+    sign = np.zeros(n_tri)
+    for k in np.unique(tri_chart[tri_chart >= 0]):
+        m = tri_chart == k
+        sign[m] = 1.0 if (area[m] > 0).sum() >= (area[m] < 0).sum() else -1.0
+    flipped = int(((sign * area <= 0) & (tri_chart >= 0)).sum())
+    face_sign = np.zeros(len(fs))
+    face_sign[poly] = sign
+    # Quads: both splits.
+    q = np.flatnonzero((fs == 4) & solved & ~exempt)
+    c = [starts[q] + k for k in range(4)]
+    s = face_sign[q]
+    splits = [(0, 1, 2), (0, 2, 3), (0, 1, 3), (1, 2, 3)]
+    convex = np.all([s * _signed(uv, c[a], c[b], c[d]) > 0 for a, b, d in splits], axis=0)
+    return flipped, int((~convex).sum())
+
+
+def noisy_quad_grid_smart_uv(name="NoisyGrid", n=40, seed=5):
+    """A curved, noisy quad grid (some quads dart-shaped, i.e. concave in 3D) cut into charts
+    by Smart UV Project's islands (seams from islands)."""
+    bpy.ops.mesh.primitive_grid_add(x_subdivisions=n + 1, y_subdivisions=n + 1, size=2.0)
+    obj = bpy.context.active_object
+    obj.name = name
+    mesh = obj.data
+    co = np.empty(3 * len(mesh.vertices), dtype=np.float32)
+    mesh.vertices.foreach_get("co", co)
+    co = co.reshape(-1, 3).astype(np.float64)
+    rng = np.random.default_rng(seed)
+    h = 2.0 / n
+    x = co[:, 0] + 0.3 * h * (rng.random(len(co)) - 0.5)
+    y = co[:, 1] + 0.3 * h * (rng.random(len(co)) - 0.5)
+    dart = rng.random(len(co)) < 0.03
+    x[dart] = co[dart, 0] + 0.6 * h
+    y[dart] = co[dart, 1] + 0.6 * h
+    z = 0.6 * (x * x - y * y) + 0.25 * np.sin(4 * x) * np.cos(3 * y) + 0.05 * h * rng.random(len(co))
+    mesh.vertices.foreach_set("co", np.column_stack([x, y, z]).astype(np.float32).ravel())
+    mesh.update()
+    common.edit_mode([obj])
+    bpy.ops.mesh.select_all(action="SELECT")
+    bpy.ops.uv.smart_project()
+    bpy.ops.uv.seams_from_islands(mark_seams=True)
+    common.object_mode()
+    return obj
+
+
+@pytest.mark.parametrize("method", PROMISING)
+def test_smart_uv_noisy_quad_grid_no_folds_under_any_triangulation(ext, scene, method):
+    obj = noisy_quad_grid_smart_uv()
+    assert len(ext.mesh_io.read_seams(obj.data)) > 0
+    result, summary = unwrap(ext, [obj], method=method)
+    assert result == {"FINISHED"}, summary
+    assert not summary.failed, summary.line()
+    flipped, nonconvex = blender_folds(ext, obj, summary.results[obj.name])
+    assert flipped == 0, f"{method}: {flipped} of Blender's loop triangles flipped; {summary.line()}"
+    assert nonconvex == 0, f"{method}: {nonconvex} quads fold on one diagonal; {summary.line()}"
+
+
+def test_smart_uv_noisy_quad_grid_lscm_folds_are_reported(ext, scene):
+    """LSCM promises nothing: on this grid it folds quads, and the report counts them (so the
+    check above can fail)."""
+    obj = noisy_quad_grid_smart_uv()
+    result, summary = unwrap(ext, [obj], method="lscm")
+    assert result == {"FINISHED"}, summary
+    flipped, nonconvex = blender_folds(ext, obj, summary.results[obj.name])
+    assert nonconvex + flipped > 0
+    reported = sum(c.flips for c in summary.results[obj.name].charts if c.status != "failed")
+    assert reported >= nonconvex
+
+
+@pytest.mark.parametrize("method", PROMISING)
+def test_suzanne_no_folds_under_any_triangulation(ext, scene, method):
+    obj = suzanne()
+    result, summary = unwrap(ext, [obj], method=method)
+    assert result == {"FINISHED"}, summary
+    assert not summary.failed, summary.line()
+    flipped, nonconvex = blender_folds(ext, obj, summary.results[obj.name])
+    assert flipped == 0, f"{method}: {flipped} of Blender's loop triangles flipped"
+    assert nonconvex == 0, f"{method}: {nonconvex} quads fold on one diagonal"
+
+
+@pytest.mark.parametrize("mesh", SHARED_MESHES)
+@pytest.mark.parametrize("method", PROMISING)
+def test_shared_meshes_no_folds_under_any_triangulation(ext, scene, mesh, method):
+    obj = shared_mesh(mesh)
+    result, summary = unwrap(ext, [obj], method=method)
+    assert result == {"FINISHED"}, summary
+    assert not summary.failed, summary.line()
+    flipped, nonconvex = blender_folds(ext, obj, summary.results[obj.name])
+    assert flipped == 0, f"{mesh} {method}: {flipped} of Blender's loop triangles flipped"
+    assert nonconvex == 0, f"{mesh} {method}: {nonconvex} quads fold on one diagonal"

@@ -45,6 +45,10 @@ pub enum UvError {
     /// The unwrap was cancelled through its [`Progress`](crate::Progress); no UVs.
     #[error("cancelled after {charts_done} of {charts_total} charts")]
     Cancelled { charts_done: usize, charts_total: usize },
+    /// A triple of the render triangulation (`triangles`) names a bad corner, mixes faces, or
+    /// its face is not covered by exactly `corners − 2` triangles.
+    #[error("triangles[{triangle}] {corners:?}: {reason}")]
+    RenderTriangle { triangle: usize, corners: [u64; 3], reason: String },
 }
 
 /// Result alias used throughout the crate.

@@ -5,10 +5,12 @@
 //! Data flow of one unwrap ([`unwrap`]):
 //! 1. [`mesh::PolyMesh`] validates the polygon soup (typed [`UvError`] naming the element).
 //! 2. [`charts`] splits the selected faces into charts along seams, non-manifold edges,
-//!    inconsistently oriented edges and the selection border, triangulates n-gons (ear
-//!    clipping), finds boundary loops and classifies each chart.
+//!    inconsistently oriented edges and the selection border, triangulates n-gons (as the
+//!    render triangulation given in [`MeshInput::triangles`] says, else by ear clipping),
+//!    finds boundary loops and classifies each chart.
 //! 3. [`methods`] maps every chart (in parallel) with the chosen [`Method`].
-//! 4. [`metrics`] measures every chart independently of the solver (flips, boundary
+//! 4. [`metrics`] measures every chart independently of the solver (flips, a quad counting as
+//!    folded when either of its diagonal splits has a flipped triangle; boundary
 //!    self-overlap, distortion) and the result carries one [`ChartReport`] per chart.
 //!
 //! See `ARCHITECTURE.md` at the repository root for the module graph.

@@ -1,6 +1,6 @@
 //! The one-call pipeline: validate, split into charts, map each chart in parallel, measure.
 
-use crate::charts::{build_charts, build_charts_counting, Chart};
+use crate::charts::{build_charts_counting, build_charts_with, Chart, FaceTriangulation};
 use crate::cuts::{self, AutoSeamOptions};
 use crate::error::{Result, UvError};
 use crate::mesh::PolyMesh;
@@ -25,6 +25,17 @@ pub struct MeshInput<'a> {
     pub selected: Option<&'a [bool]>,
     /// Pinned corners with the UV they must keep. Default: none.
     pub pins: &'a [(u32, [f64; 2])],
+    /// Render triangulation: corner index triples (Blender's `mesh.loop_triangles`), which
+    /// faces of four or more corners are split by (see [`FaceTriangulation`]). Default: none
+    /// (the core splits n-gons itself). Quads are kept and measured convex either way.
+    pub triangles: &'a [[u32; 3]],
+}
+
+impl Default for MeshInput<'_> {
+    /// An empty mesh with no seams, pins or render triangles and every face selected.
+    fn default() -> Self {
+        MeshInput { positions: &[], corner_verts: &[], face_sizes: &[], seams: &[], selected: None, pins: &[], triangles: &[] }
+    }
 }
 
 /// Where each solved chart is placed in UV space.
@@ -209,7 +220,8 @@ pub fn unwrap(input: &MeshInput<'_>, options: &UnwrapOptions) -> Result<Unwrappe
     // practice are faster sequential than split across threads.
     faer::set_global_parallelism(faer::Par::Seq);
 
-    let (charts, non_manifold_edges) = build_charts_counting(&mesh, input.seams, input.selected);
+    let render = if input.triangles.is_empty() { None } else { Some(FaceTriangulation::new(&mesh, input.triangles)?) };
+    let (charts, non_manifold_edges) = build_charts_counting(&mesh, input.seams, input.selected, render.as_ref());
     let mut pin_of_corner: Vec<Option<[f64; 2]>> = vec![None; n_corners];
     for &(c, uv) in input.pins {
         pin_of_corner[c as usize] = Some(uv);
@@ -219,7 +231,7 @@ pub fn unwrap(input: &MeshInput<'_>, options: &UnwrapOptions) -> Result<Unwrappe
     for &v in &options.auto_seams.avoid_vertices {
         avoid[v as usize] = true;
     }
-    let ctx = Context { mesh: &mesh, pins: &pin_of_corner, options, avoid: &avoid };
+    let ctx = Context { mesh: &mesh, render: render.as_ref(), pins: &pin_of_corner, options, avoid: &avoid };
     // With a Progress: charts after a cancel are skipped (None), and the unwrap is an error.
     let total = charts.len();
     if let Some(p) = &options.progress {
@@ -333,7 +345,7 @@ fn solve_chart(
             });
         }
     }
-    let m = metrics::chart_metrics(&chart.positions, &chart.triangles, &solution.uv, &chart.boundary_loops);
+    let m = metrics::chart_metrics_with_quads(&chart.positions, &chart.triangles, &chart.quads, &solution.uv, &chart.boundary_loops);
     if !(m.area_3d > 0.0) {
         // Every face is degenerate (collinear or coincident corners): no UV map can match a
         // surface without area, so the chart keeps its UVs and says why.
@@ -392,6 +404,8 @@ struct Piece {
 /// What automatic cutting needs from the unwrap.
 struct Context<'a, 'm> {
     mesh: &'a PolyMesh<'m>,
+    /// The render triangulation, so rebuilt pieces split n-gons like the input charts.
+    render: Option<&'a FaceTriangulation>,
     pins: &'a [Option<[f64; 2]>],
     options: &'a UnwrapOptions,
     avoid: &'a [bool],
@@ -488,7 +502,7 @@ fn auto_cut(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], depth
         let cut = cuts::cut_chart(ctx.mesh, chart, &ctx.options.auto_seams, ctx.avoid, &seed, round);
         let mut all: Vec<[u32; 2]> = base_seams.to_vec();
         all.extend_from_slice(&cut.seams);
-        let sub = build_charts(ctx.mesh, &all, Some(&mask));
+        let sub = build_charts_with(ctx.mesh, &all, Some(&mask), ctx.render);
         let mut pieces: Vec<Piece> = Vec::with_capacity(sub.len());
         let mut first = true;
         for c in sub {
@@ -525,7 +539,7 @@ fn auto_cut(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], depth
         if !split.is_empty() {
             let mut all: Vec<[u32; 2]> = base_seams.to_vec();
             all.extend_from_slice(&split);
-            let halves = build_charts(ctx.mesh, &all, Some(&mask));
+            let halves = build_charts_with(ctx.mesh, &all, Some(&mask), ctx.render);
             let mut out = Vec::new();
             let mut first = true;
             for h in halves {

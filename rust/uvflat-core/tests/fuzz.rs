@@ -213,6 +213,7 @@ fn run_case(c: &Case, stats: &Stats) -> Result<(), TestCaseError> {
         seams: &seams,
         selected: Some(&selected),
         pins: &pins,
+        triangles: &[],
     };
     let method = methods()[c.method].clone();
     let r = unwrap(&input, &UnwrapOptions { method: method.clone(), ..Default::default() });

@@ -27,6 +27,7 @@ pub enum Kind {
     Option,
     AngleSum,
     Cancelled,
+    Triangle,
 }
 
 /// (kind, class name, parent kind (None: Exception), also a ValueError, attribute names, doc)
@@ -93,6 +94,17 @@ const SPECS: &[Spec] = &[
         &["seam", "vertex", "n_vertices"],
         "A seam refers to a vertex index outside 0..n_vertices.\n\n\
          Attributes: seam (row of `seams`), vertex (the bad index), n_vertices.",
+    ),
+    (
+        Kind::Triangle,
+        "TriangleError",
+        Some(Kind::Mesh),
+        false,
+        &["triangle", "corners", "reason"],
+        "A row of `triangles` (the render triangulation) names a corner that does not exist, \
+         corners of different faces or one corner twice, or a face is not triangulated by \
+         exactly corners - 2 of its rows.\n\n\
+         Attributes: triangle (row of `triangles`), corners (the row), reason.",
     ),
     (
         Kind::Pin,
@@ -274,6 +286,12 @@ pub fn map_uv_error(py: Python<'_>, err: UvError, uv_argument: &str) -> PyErr {
         UvError::Option { name, reason } => {
             error(py, Kind::Option, msg, attrs![py; "option" => name, "reason" => reason])
         }
+        UvError::RenderTriangle { triangle, corners, reason } => error(
+            py,
+            Kind::Triangle,
+            msg,
+            attrs![py; "triangle" => triangle, "corners" => corners.to_vec(), "reason" => reason],
+        ),
         UvError::AngleSum { entry, vertex, value, reason } => error(
             py,
             Kind::AngleSum,

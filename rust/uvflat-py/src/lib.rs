@@ -53,6 +53,7 @@ impl Soup {
             seams,
             selected,
             pins,
+            ..Default::default()
         }
     }
 }
@@ -291,14 +292,34 @@ fn factorization_seconds(
     })
 }
 
+/// Render triangulation `(T, 3)` of corner indices (Blender's `loop_triangles`), typed errors
+/// naming the row; its fit to the faces is checked by the core.
+fn read_triangles(py: Python<'_>, triangles: Option<&Bound<'_, PyAny>>, n_corners: usize) -> PyResult<Vec<[u32; 3]>> {
+    Ok(match triangles.filter(|t| !t.is_none()) {
+        None => Vec::new(),
+        Some(t) => {
+            let (flat, _) = indices(t, "triangles", Layout::Rows("T", 3), |i, corner| {
+                let (row, reason) = (i / 3, format!("corner {corner} out of range (mesh has {n_corners} corners)"));
+                error(
+                    py,
+                    Kind::Triangle,
+                    format!("triangles[{row}]: {reason}"),
+                    attrs![py; "triangle" => row, "reason" => reason],
+                )
+            })?;
+            convert::rows::<3, u32>(&flat)
+        }
+    })
+}
+
 /// Unwrap the selected faces of a polygon mesh into per-corner UVs.
 ///
 /// See the package documentation (`uvflat.unwrap`) for the arguments.
 #[pyfunction]
 #[pyo3(signature = (positions, corner_verts, face_sizes, *, method = None, seams = None, selected = None,
-                    pins = None, pin_uvs = None, fit_to = None, auto_seams = None, max_stretch = None,
-                    max_cones = None, avoid_vertices = None, sharp_angle = None, progress = None,
-                    **options))]
+                    pins = None, pin_uvs = None, fit_to = None, triangles = None, auto_seams = None,
+                    max_stretch = None, max_cones = None, avoid_vertices = None, sharp_angle = None,
+                    progress = None, **options))]
 #[allow(clippy::too_many_arguments)]
 fn unwrap(
     py: Python<'_>,
@@ -311,6 +332,7 @@ fn unwrap(
     pins: Option<&Bound<'_, PyAny>>,
     pin_uvs: Option<&Bound<'_, PyAny>>,
     fit_to: Option<&Bound<'_, PyAny>>,
+    triangles: Option<&Bound<'_, PyAny>>,
     auto_seams: Option<&Bound<'_, PyAny>>,
     max_stretch: Option<&Bound<'_, PyAny>>,
     max_cones: Option<&Bound<'_, PyAny>>,
@@ -327,6 +349,7 @@ fn unwrap(
 
     let seams = read_seams(py, seams, n_vertices)?;
     let selected = read_selected(selected)?;
+    let triangles = read_triangles(py, triangles, n_corners)?;
 
     let pins = pins.filter(|p| !p.is_none());
     let pin_uvs = pin_uvs.filter(|p| !p.is_none());
@@ -373,7 +396,8 @@ fn unwrap(
     let unwrap_options = UnwrapOptions { method, fit, auto_seams, progress };
     let outcome = run_core(py, "fit_to", || {
         let start = Instant::now();
-        let r = uvflat_core::unwrap(&soup.input(&seams, selected.as_deref(), &pins), &unwrap_options)?;
+        let input = MeshInput { triangles: &triangles, ..soup.input(&seams, selected.as_deref(), &pins) };
+        let r = uvflat_core::unwrap(&input, &unwrap_options)?;
         Ok((r, start.elapsed().as_secs_f64()))
     });
     // An exception raised by the progress callback wins over the Cancelled it caused.
@@ -439,7 +463,7 @@ fn python_progress(callback: Py<PyAny>, raised: Arc<Mutex<Option<PyErr>>>) -> Pr
 ///
 /// See the package documentation (`uvflat.metrics`) for the arguments.
 #[pyfunction]
-#[pyo3(signature = (positions, corner_verts, face_sizes, uv, *, selected = None))]
+#[pyo3(signature = (positions, corner_verts, face_sizes, uv, *, selected = None, triangles = None))]
 fn metrics(
     py: Python<'_>,
     positions: &Bound<'_, PyAny>,
@@ -447,18 +471,21 @@ fn metrics(
     face_sizes: &Bound<'_, PyAny>,
     uv: &Bound<'_, PyAny>,
     selected: Option<&Bound<'_, PyAny>>,
+    triangles: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<PyMetrics> {
     let soup = read_soup(positions, corner_verts, face_sizes)?;
     let (uv_flat, _) = floats(uv, "uv", Layout::Rows("C", 2))?;
     let uv = convert::rows::<2, f64>(&uv_flat);
     let selected = read_selected(selected)?;
+    let triangles = read_triangles(py, triangles, soup.corner_verts.len())?;
     let m = run_core(py, "uv", || {
-        uvflat_core::metrics::measure(
+        uvflat_core::metrics::measure_with_triangles(
             &soup.positions,
             &soup.corner_verts,
             &soup.face_sizes,
             &uv,
             selected.as_deref(),
+            &triangles,
         )
     })?;
     Ok(PyMetrics::from(m))

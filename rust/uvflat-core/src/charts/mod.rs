@@ -10,8 +10,10 @@
 //! side, a seam that ends inside a chart becomes a slit, and a "bow-tie" vertex shared by two
 //! fans becomes two chart vertices.
 
+mod render;
 mod triangulate;
 
+pub use render::FaceTriangulation;
 pub use triangulate::{triangulate_polygon, triangulate_polygon_avoiding, triangulate_polygon_with};
 
 use std::collections::{HashMap, HashSet};
@@ -34,6 +36,15 @@ pub struct Chart {
     pub triangles: Vec<[u32; 3]>,
     /// Input face of every triangle.
     pub triangle_face: Vec<u32>,
+    /// The chart's quad faces: a quad is flip-free only if it is strictly convex in UV, i.e.
+    /// positive on both of its diagonal splits (exporters and engines pick their own). Quads
+    /// with a corner at a vertex inside the chart shared by only two faces are left out (one
+    /// of its two corner angles is at least π, so convexity is impossible): they count as
+    /// their own two triangles, like n-gons.
+    pub quads: Vec<Quad>,
+    /// Faces of four or more corners as polygons (quads included, with the same exception):
+    /// the polygon graph of the barycentric methods, on which faces come out convex.
+    pub polygons: Vec<Polygon>,
     /// Boundary loops, each oriented with the chart on its left (counter-clockwise for the
     /// outer loop of a well-oriented map).
     pub boundary_loops: Vec<Vec<u32>>,
@@ -45,7 +56,65 @@ pub struct Chart {
     pub defect: Option<String>,
 }
 
+/// A quad face of a chart: its chart vertices in face order and its two triangles.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Quad {
+    /// Chart vertices in the face's winding order.
+    pub vertices: [u32; 4],
+    /// Indices into [`Chart::triangles`] of the quad's own split.
+    pub triangles: [u32; 2],
+}
+
+/// A face of four or more corners: its chart vertices in face order and its triangles.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Polygon {
+    /// Chart vertices in the face's winding order.
+    pub vertices: Vec<u32>,
+    /// Indices into [`Chart::triangles`] of the face's triangles.
+    pub triangles: std::ops::Range<u32>,
+}
+
+impl Quad {
+    /// The two triangles of the split the chart does not use (the other diagonal), oriented
+    /// like the face. `own` is the chart's triangle list.
+    pub fn other_split(&self, own: &[[u32; 3]]) -> [[u32; 3]; 2] {
+        let [a, b, c, d] = self.vertices;
+        let t = own[self.triangles[0] as usize];
+        if t.contains(&a) && t.contains(&c) {
+            [[a, b, d], [b, c, d]]
+        } else {
+            [[a, b, c], [a, c, d]]
+        }
+    }
+
+    /// Both splits' four triangles: `(a, b, c), (a, c, d), (a, b, d), (b, c, d)`; all four are
+    /// positive exactly when the quad is strictly convex with the chart's orientation.
+    pub fn all_splits(&self) -> [[u32; 3]; 4] {
+        let [a, b, c, d] = self.vertices;
+        [[a, b, c], [a, c, d], [a, b, d], [b, c, d]]
+    }
+}
+
 impl Chart {
+    /// The chart's triangles followed by the other diagonal's two triangles of every quad,
+    /// and a weight per triangle (1, or ½ for the four triangles of a quad, so each quad
+    /// weighs its area once): what a barrier method keeps positive so that quads stay
+    /// strictly convex. Without quads, the chart's triangles with weight 1.
+    pub fn triangles_both_splits(&self) -> (Vec<[u32; 3]>, Vec<f64>) {
+        let mut tris = self.triangles.clone();
+        let mut w = vec![1.0; tris.len()];
+        for q in &self.quads {
+            for &t in &q.triangles {
+                w[t as usize] = 0.5;
+            }
+            for t in q.other_split(&self.triangles) {
+                tris.push(t);
+                w.push(0.5);
+            }
+        }
+        (tris, w)
+    }
+
     /// Average pinned UV per chart vertex that has a pinned corner.
     pub fn vertex_pins(&self, pin_of_corner: &[Option<[f64; 2]>]) -> Vec<(u32, [f64; 2])> {
         let mut acc: HashMap<u32, ([f64; 2], u32)> = HashMap::new();
@@ -156,12 +225,31 @@ fn edge_key(a: u32, b: u32) -> u64 {
 /// Charts are numbered by their smallest face index. Never fails: problems of a single chart
 /// (non-orientable, non-manifold vertex) are recorded in [`Chart::defect`].
 pub fn build_charts(mesh: &PolyMesh<'_>, seams: &[[u32; 2]], selected: Option<&[bool]>) -> Vec<Chart> {
-    build_charts_counting(mesh, seams, selected).0
+    build_charts_with(mesh, seams, selected, None)
 }
 
-/// [`build_charts`], also returning how many non-manifold edges (used by three or more
+/// [`build_charts`] with the render triangulation of the faces (see [`FaceTriangulation`]):
+/// faces of four or more corners are split the way it says instead of by ear clipping, except
+/// where its diagonal already is an edge of the chart (two faces around a vertex shared by
+/// only two faces), which would make the chart fold onto itself; such a face keeps the core's
+/// own split (for quads the metrics and methods look at both diagonals anyway).
+pub fn build_charts_with(
+    mesh: &PolyMesh<'_>,
+    seams: &[[u32; 2]],
+    selected: Option<&[bool]>,
+    render: Option<&FaceTriangulation>,
+) -> Vec<Chart> {
+    build_charts_counting(mesh, seams, selected, render).0
+}
+
+/// [`build_charts_with`], also returning how many non-manifold edges (used by three or more
 /// selected faces) were treated as seams.
-pub fn build_charts_counting(mesh: &PolyMesh<'_>, seams: &[[u32; 2]], selected: Option<&[bool]>) -> (Vec<Chart>, usize) {
+pub fn build_charts_counting(
+    mesh: &PolyMesh<'_>,
+    seams: &[[u32; 2]],
+    selected: Option<&[bool]>,
+    render: Option<&FaceTriangulation>,
+) -> (Vec<Chart>, usize) {
     let n_faces = mesh.n_faces();
     let n_corners = mesh.n_corners();
     let is_sel = |f: usize| selected.is_none_or(|s| s[f]);
@@ -236,11 +324,17 @@ pub fn build_charts_counting(mesh: &PolyMesh<'_>, seams: &[[u32; 2]], selected: 
     let corner_root: Vec<u32> = (0..n_corners as u32).map(|c| corner_uf.find(c)).collect();
 
     use rayon::prelude::*;
-    let charts = chart_faces.into_par_iter().map(|faces| make_chart(mesh, faces, &corner_root, &joined)).collect();
+    let charts = chart_faces.into_par_iter().map(|faces| make_chart(mesh, faces, &corner_root, &joined, render)).collect();
     (charts, non_manifold)
 }
 
-fn make_chart(mesh: &PolyMesh<'_>, faces: Vec<u32>, corner_root: &[u32], joined: &[bool]) -> Chart {
+fn make_chart(
+    mesh: &PolyMesh<'_>,
+    faces: Vec<u32>,
+    corner_root: &[u32],
+    joined: &[bool],
+    render: Option<&FaceTriangulation>,
+) -> Chart {
     let positions_in = mesh.positions();
     let mut local_of_root: HashMap<u32, u32> = HashMap::new();
     let mut mesh_vertex = Vec::new();
@@ -248,6 +342,8 @@ fn make_chart(mesh: &PolyMesh<'_>, faces: Vec<u32>, corner_root: &[u32], joined:
     let mut corner_vertex = Vec::new();
     let mut triangles = Vec::new();
     let mut triangle_face = Vec::new();
+    let mut quads = Vec::new();
+    let mut polygons = Vec::new();
     // Boundary half-edges (chart vertex a → b): polygon edges not joined to another face.
     let mut boundary_edges: Vec<(u32, u32)> = Vec::new();
     // First pass: chart vertices of every corner, and the chart's polygon edges.
@@ -306,8 +402,36 @@ fn make_chart(mesh: &PolyMesh<'_>, faces: Vec<u32>, corner_root: &[u32], joined:
         }
         poly_pts.clear();
         poly_pts.extend(r.map(|c| positions_in[mesh.corner_vert(c) as usize]));
-        let through = if m == 4 { (0..4).find(|&k| valence[local[k] as usize] == 2) } else { None };
-        let tris = triangulate_polygon_with(&poly_pts, |i, j| edges.contains(&ukey(local[i], local[j])), through);
+        // A quad at a vertex inside the chart shared by only two faces is split through that
+        // vertex whatever the render triangulation says (see `through` below): no flat map
+        // keeps the other split positive there.
+        let two_face = m == 4 && local.iter().any(|&v| valence[v as usize] == 2);
+        let given: Option<Vec<[usize; 3]>> = render.filter(|_| !two_face).and_then(|r| {
+            let tris: Vec<[usize; 3]> =
+                r.face(f as usize).iter().map(|t| [t[0] as usize, t[1] as usize, t[2] as usize]).collect();
+            let taken = tris.iter().any(|t| {
+                (0..3).any(|k| {
+                    let (i, j) = (t[k], t[(k + 1) % 3]);
+                    (i + 1) % m != j && (j + 1) % m != i && edges.contains(&ukey(local[i], local[j]))
+                })
+            });
+            (!taken).then_some(tris)
+        });
+        let tris = given.unwrap_or_else(|| {
+            let through = if m == 4 { (0..4).find(|&k| valence[local[k] as usize] == 2) } else { None };
+            triangulate_polygon_with(&poly_pts, |i, j| edges.contains(&ukey(local[i], local[j])), through)
+        });
+        // A vertex inside the chart shared by only two faces has its two corner angles sum to
+        // 2π, so one of them is at least π: such quads cannot be strictly convex and keep
+        // only their own split (split through that vertex, see above).
+        if tris.len() == m - 2 && local.iter().all(|&v| valence[v as usize] != 2) {
+            let n = triangles.len() as u32;
+            polygons.push(Polygon { vertices: local.to_vec(), triangles: n..n + (m - 2) as u32 });
+        }
+        if m == 4 && tris.len() == 2 && !two_face {
+            let n = triangles.len() as u32;
+            quads.push(Quad { vertices: [local[0], local[1], local[2], local[3]], triangles: [n, n + 1] });
+        }
         for t in tris {
             for k in 0..3 {
                 let (i, j) = (t[k], t[(k + 1) % 3]);
@@ -395,6 +519,8 @@ fn make_chart(mesh: &PolyMesh<'_>, faces: Vec<u32>, corner_root: &[u32], joined:
         positions,
         triangles,
         triangle_face,
+        quads,
+        polygons,
         boundary_loops,
         genus,
         kind,

@@ -21,7 +21,7 @@
 //! triangles; the report counts them.
 
 use super::{chart_angles, ChartFailure, ChartSolution};
-use crate::charts::Chart;
+use crate::charts::{Chart, Polygon};
 use crate::geometry::{norm, sub};
 use crate::methods::BoundaryShape;
 use crate::solvers::{FixedValueSolver, Symmetry};
@@ -281,6 +281,91 @@ pub fn boundary_positions(positions: &[[f64; 3]], outer: &[u32], shape: Boundary
 /// Triplets of the weighted Laplacian `L` (rows: Σ_j w_ij (x_i − x_j)): the lower triangle
 /// for the symmetric weights (uniform, cotangent), every entry for mean value.
 pub fn laplacian_triplets(positions: &[[f64; 3]], triangles: &[[u32; 3]], weights: Weights) -> Vec<(u32, u32, f64)> {
+    laplacian_triplets_with_polygons(positions, triangles, &[], weights)
+}
+
+/// [`laplacian_triplets`] on the polygon graph: the triangles of each of `polygons` (by
+/// their [`Polygon::triangles`]) are replaced by the polygon, whose diagonals are not edges.
+/// Uniform weights count each polygon edge once; mean value weights use the polygon's corner
+/// angle (the 3D angle between its two edges at the corner, in (0, π), so the weights stay
+/// positive). Cotangent weights ignore `polygons` (they are defined on triangles).
+///
+/// With positive weights on the polygon graph and a convex boundary, every interior vertex
+/// is a convex combination of its polygon neighbours and every face comes out convex
+/// (Tutte 1963 for uniform weights; Floater 2003 and Gortler, Gotsman & Thurston, "Discrete
+/// one-forms on meshes and applications to 3D mesh parameterization", CAGD 23(2), 2006, for
+/// positive weights on polygon meshes): quads and n-gons are then positive under any
+/// triangulation, which a map on the triangulated graph does not promise.
+pub fn laplacian_triplets_with_polygons(
+    positions: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    polygons: &[Polygon],
+    weights: Weights,
+) -> Vec<(u32, u32, f64)> {
+    if polygons.is_empty() || weights == Weights::Cotangent {
+        return laplacian_triplets_triangles(positions, triangles, weights);
+    }
+    let mut in_polygon = vec![false; triangles.len()];
+    for p in polygons {
+        for t in p.triangles.clone() {
+            in_polygon[t as usize] = true;
+        }
+    }
+    let rest: Vec<[u32; 3]> = triangles.iter().zip(&in_polygon).filter(|(_, &q)| !q).map(|(t, _)| *t).collect();
+    let mut out = laplacian_triplets_triangles(positions, &rest, weights);
+    match weights {
+        Weights::Uniform => {
+            // Polygon edges not already edges of a triangle.
+            let mut have: std::collections::HashSet<(u32, u32)> = rest
+                .iter()
+                .flat_map(|t| (0..3).map(move |k| (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3]))))
+                .collect();
+            for p in polygons {
+                let m = p.vertices.len();
+                for k in 0..m {
+                    let (i, j) = (p.vertices[k], p.vertices[(k + 1) % m]);
+                    if have.insert((i.min(j), i.max(j))) {
+                        out.extend([(i, i, 1.0), (j, j, 1.0), (i.max(j), i.min(j), -1.0)]);
+                    }
+                }
+            }
+        }
+        Weights::MeanValue => {
+            let floor = 1e-12 * mean_edge(positions, triangles);
+            for p in polygons {
+                let m = p.vertices.len();
+                for k in 0..m {
+                    let i = p.vertices[k];
+                    let (j, l) = (p.vertices[(k + 1) % m], p.vertices[(k + m - 1) % m]);
+                    let x = positions[i as usize];
+                    let (a, b) = (sub(positions[j as usize], x), sub(positions[l as usize], x));
+                    let theta = crate::geometry::angle_between(a, b).clamp(1e-12, std::f64::consts::PI - 1e-9);
+                    let th = (0.5 * theta).tan();
+                    for (n, e) in [(j, a), (l, b)] {
+                        let w = th / norm(e).max(floor);
+                        out.push((i, i, w));
+                        out.push((i, n, -w));
+                    }
+                }
+            }
+        }
+        Weights::Cotangent => unreachable!("handled above"),
+    }
+    out
+}
+
+fn mean_edge(positions: &[[f64; 3]], triangles: &[[u32; 3]]) -> f64 {
+    let (mut s, mut n) = (0.0, 0usize);
+    for t in triangles {
+        for k in 0..3 {
+            s += norm(sub(positions[t[(k + 1) % 3] as usize], positions[t[k] as usize]));
+            n += 1;
+        }
+    }
+    if n > 0 && s > 0.0 { s / n as f64 } else { 1.0 }
+}
+
+fn laplacian_triplets_triangles(positions: &[[f64; 3]], triangles: &[[u32; 3]], weights: Weights) -> Vec<(u32, u32, f64)> {
     let mut out = Vec::with_capacity(triangles.len() * 12);
     let push_sym = |i: u32, j: u32, w: f64, out: &mut Vec<(u32, u32, f64)>| {
         out.extend([(i, i, w), (j, j, w), (i.max(j), i.min(j), -w)]);
@@ -348,7 +433,8 @@ pub fn solve(
         add_virtual_band(&mut ext);
     }
     let n = ext.positions.len();
-    let trip = laplacian_triplets(&ext.positions, &ext.triangles, weights);
+    // Polygons as polygons (their triangles are the chart's, the first of `ext.triangles`).
+    let trip = laplacian_triplets_with_polygons(&ext.positions, &ext.triangles, &chart.polygons, weights);
     let symmetry = if weights == Weights::MeanValue { Symmetry::General } else { Symmetry::Symmetric };
     let bnd = boundary_positions(&ext.positions, &ext.outer, shape);
     let solver = FixedValueSolver::new(n, &trip, &ext.outer, symmetry)?;

@@ -28,6 +28,10 @@
 //! * step: [`flip_free_line_search`] (largest step keeping every triangle positive, then
 //!   halving until E decreases), so no triangle ever flips and E decreases monotonically.
 //!
+//! Quads: the energy and the line search also cover the other diagonal's two triangles of
+//! every quad ([`super::barrier_triangles`]), so quads stay strictly convex; an LSCM start
+//! with a non-convex quad is not used.
+//!
 //! Pins: the energy does not see them; the result is moved onto the pins by the least-squares
 //! similarity (exact for one or two pins) and the report says so.
 //!
@@ -324,23 +328,36 @@ pub fn solve_with_history(
     options: &MipsOptions,
 ) -> Result<(ChartSolution, Vec<f64>), ChartFailure> {
     super::require_disk(chart)?;
-    let tris = &chart.triangles;
     let n = chart.positions.len();
-    let rest: Vec<RestTriangle> = tris
-        .iter()
-        .map(|t| RestTriangle::from_3d([chart.positions[t[0] as usize], chart.positions[t[1] as usize], chart.positions[t[2] as usize]]))
-        .collect();
-    // LSCM minimises a conformal energy too, so when it is flip-free it starts Newton next to
-    // the MIPS minimiser; otherwise the mean value map, flip-free by Floater's theorem.
-    let lscm_start = super::lscm::solve_with_angles(chart, &super::chart_angles(&chart.positions, tris), &[])
+    let rest_of = |tris: &[[u32; 3]]| -> Vec<RestTriangle> {
+        tris.iter()
+            .map(|t| RestTriangle::from_3d([chart.positions[t[0] as usize], chart.positions[t[1] as usize], chart.positions[t[2] as usize]]))
+            .collect()
+    };
+    let rest = rest_of(&chart.triangles);
+    // LSCM minimises a conformal energy too, so when it is flip-free (quads strictly convex
+    // included) it starts Newton next to the MIPS minimiser; otherwise the mean value map,
+    // flip-free with convex quads by Floater's theorem on the polygon graph.
+    let lscm_start = super::lscm::solve_with_angles(chart, &super::chart_angles(&chart.positions, &chart.triangles), &[])
         .ok()
         .map(|(uv, _)| uv)
-        .filter(|uv| all_positive(tris, uv) && mips_energy(&rest, tris, uv).is_finite());
+        .filter(|uv| {
+            all_positive(&chart.triangles, uv)
+                && mips_energy(&rest, &chart.triangles, uv).is_finite()
+                && super::nonconvex_quads(chart, uv) == 0
+        });
     let start_name = if lscm_start.is_some() { "lscm" } else { "mean_value" };
     let mut uv = match lscm_start {
         Some(uv) => uv,
         None => flip_free_start(chart)?,
     };
+    // The barrier covers both diagonal splits of every quad (see `barrier_triangles`).
+    let (barrier, weights, left_out) = super::barrier_triangles(chart, &uv);
+    let tris = &barrier;
+    let mut rest = rest_of(tris);
+    for (r, w) in rest.iter_mut().zip(&weights) {
+        r.area *= w;
+    }
     let mut energy = mips_energy(&rest, tris, &uv);
     if !energy.is_finite() {
         let mut sol = ChartSolution::direct(uv);
@@ -462,7 +479,10 @@ pub fn solve_with_history(
     let mut sol = ChartSolution::direct(uv);
     sol.iterations = iterations;
     sol.residual = change;
-    let started = format!("MIPS energy {energy:.6} after {iterations} iteration(s), started from {start_name}");
+    let mut started = format!("MIPS energy {energy:.6} after {iterations} iteration(s), started from {start_name}");
+    if left_out > 0 {
+        started = format!("{started}; {left_out} quad triangle(s) of the other diagonal were not positive at the start, so those quads may stay non-convex");
+    }
     sol.note = Some(match honour_pins_by_similarity(&mut sol.uv, pins, "MIPS") {
         Some(pinned) => format!("{started}; {pinned}"),
         None => started,

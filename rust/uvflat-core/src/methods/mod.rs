@@ -11,6 +11,7 @@ pub mod lscm;
 pub mod mean_value;
 pub mod mips;
 pub mod options;
+pub mod quad_repair;
 pub mod scaffold;
 pub mod slim;
 pub mod spectral;
@@ -322,6 +323,92 @@ pub fn chart_angles(positions: &[[f64; 3]], triangles: &[[u32; 3]]) -> Vec<[f64;
         .collect()
 }
 
+/// Number of quads of `chart` that are not strictly convex under `uv` (with the chart's
+/// positive orientation; [`crate::metrics::quad_folds`]).
+pub fn nonconvex_quads(chart: &Chart, uv: &[[f64; 2]]) -> usize {
+    chart.quads.iter().filter(|q| crate::metrics::quad_folds(q, uv, 1.0) > 0).count()
+}
+
+/// The triangles a barrier method (SLIM, MIPS, scaffold) keeps positive, with their area
+/// weights, given its starting map `uv`: the chart's triangles, then the other diagonal's
+/// two triangles of every quad that are positive at `uv` ([`Chart::triangles_both_splits`];
+/// the four triangles of a quad weigh ½ each). Keeping both splits positive keeps quads
+/// strictly convex, whichever diagonal an exporter picks. Also returns the number of
+/// other-diagonal triangles left out because they are not positive at the start (no
+/// barrier can restore them; the metrics count their quads).
+pub fn barrier_triangles(chart: &Chart, uv: &[[f64; 2]]) -> (Vec<[u32; 3]>, Vec<f64>, usize) {
+    let (all, w) = chart.triangles_both_splits();
+    let n = chart.triangles.len();
+    let mut tris = Vec::with_capacity(all.len());
+    let mut weights = Vec::with_capacity(all.len());
+    let mut left_out = 0;
+    for (k, (t, wt)) in all.into_iter().zip(w).enumerate() {
+        if k >= n {
+            let (p0, p1, p2) = (uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]);
+            let a = (p1[0] - p0[0]) * (p2[1] - p0[1]) - (p1[1] - p0[1]) * (p2[0] - p0[0]);
+            if !(a > 0.0) {
+                left_out += 1;
+                continue;
+            }
+        }
+        tris.push(t);
+        weights.push(wt);
+    }
+    (tris, weights, left_out)
+}
+
+/// Post-check of a method that promises no flips but has no barrier for quads (ABF: its
+/// angles are per triangle, so a quad's corner may exceed π): if `sol` leaves a quad of the
+/// chart non-convex, first [`quad_repair::repair_quads`] moves the few vertices involved
+/// (never flipping anything; pinned vertices and `fixed` ones stay) and the note says so;
+/// if quads are still not convex, the chart is re-solved by SLIM, whose barrier covers both
+/// diagonal splits of every quad and whose start (the mean value map on the polygon graph)
+/// has convex quads; the report marks it as a fallback and says why. A solution that already
+/// fell back (to LSCM, which promises nothing) is left alone, and so is one SLIM cannot
+/// improve on.
+pub fn convex_quads_or_slim(
+    chart: &Chart,
+    pins: &[(u32, [f64; 2])],
+    mut sol: ChartSolution,
+    method: &str,
+    mut fixed: Vec<bool>,
+) -> std::result::Result<ChartSolution, ChartFailure> {
+    let bad = nonconvex_quads(chart, &sol.uv);
+    if bad == 0 || sol.fallback.is_some() {
+        return Ok(sol);
+    }
+    if !pins.is_empty() {
+        fixed.resize(chart.positions.len(), false);
+        for &(v, _) in pins {
+            fixed[v as usize] = true;
+        }
+    }
+    let mut repaired_uv = sol.uv.clone();
+    let (left, moved) = quad_repair::repair_quads(chart, &mut repaired_uv, &fixed);
+    if left == 0 {
+        sol.uv = repaired_uv;
+        let note = format!("{bad} quad(s) non-convex after {method} made strictly convex by moving {moved} vertex(es)");
+        sol.note = Some(match sol.note.take() {
+            Some(n) => format!("{n}; {note}"),
+            None => note,
+        });
+        return Ok(sol);
+    }
+    let repaired = match slim::solve(chart, pins, &slim::SlimOptions::default()) {
+        Ok(r) if r.fallback.is_none() && nonconvex_quads(chart, &r.uv) < bad => r,
+        _ => return Ok(sol),
+    };
+    let mut out = repaired;
+    out.fallback = Some(Fallback {
+        method: "slim",
+        reason: format!(
+            "the {method} layout left {bad} quad(s) non-convex (folded on one of their diagonals); SLIM, which keeps quads convex, was used instead{}",
+            out.note.take().map(|n| format!(" ({n})")).unwrap_or_default()
+        ),
+    });
+    Ok(out)
+}
+
 /// Check that a chart can be mapped by a method that needs a disk (with or without holes).
 pub fn require_disk(chart: &Chart) -> std::result::Result<(), ChartFailure> {
     if let Some(d) = &chart.defect {
@@ -374,7 +461,17 @@ fn dispatch(method: &Method, chart: &Chart, pins: &[(u32, [f64; 2])]) -> std::re
         Method::MeanValue { boundary } => mean_value::solve(chart, pins, *boundary),
         Method::Lscm => lscm::solve(chart, pins),
         Method::Spectral(o) => spectral::solve(chart, pins, o),
-        Method::Abf(o) => abf::solve(chart, pins, o),
+        Method::Abf(o) => abf::solve(chart, pins, o).and_then(|sol| {
+            // A convex outline stays put: its vertices do not move (holes' may).
+            let mut fixed = Vec::new();
+            if o.boundary == abf::AbfBoundary::Convex {
+                fixed = vec![false; chart.positions.len()];
+                for &v in chart.outer_loop().map(|l| &chart.boundary_loops[l][..]).unwrap_or(&[]) {
+                    fixed[v as usize] = true;
+                }
+            }
+            convex_quads_or_slim(chart, pins, sol, "ABF", fixed)
+        }),
         Method::Arap(o) => arap::solve(chart, pins, o),
         Method::Slim(o) => slim::solve(chart, pins, o),
         Method::Mips(o) => mips::solve(chart, pins, o),

@@ -51,6 +51,9 @@
 //! (Floater 2003; an embedding by Tutte's theorem), each scaled by the energy-optimal factor.
 //! Valid: every triangle positive, no boundary self-overlap, and a scaffold can be built.
 //!
+//! Quads: the chart energy and the line search also cover the other diagonal's two triangles
+//! of every quad ([`super::barrier_triangles`]), so quads stay strictly convex.
+//!
 //! Guarantee: all chart and scaffold triangles stay positively oriented and the box boundary is
 //! fixed, so chart ∪ scaffold stays an embedded triangulation of the box (a locally injective
 //! map of a disk onto a convex polygon's interior with the boundary fixed is injective):
@@ -480,7 +483,7 @@ fn pick_start(
 ) -> Result<(Option<(Vec<[f64; 2]>, f64, &'static str)>, Vec<String>), ChartFailure> {
     let tris = &chart.triangles;
     let (candidates, mut rejected) = super::slim::candidate_starts(chart, &[], true);
-    let mut best: Option<(Vec<[f64; 2]>, f64, &'static str)> = None;
+    let mut best: Option<(Vec<[f64; 2]>, f64, &'static str, usize)> = None;
     for (mut uv, name) in candidates {
         scale_optimally(rest, tris, &mut uv);
         let e = chart_energy(rest, area, total, tris, &uv);
@@ -495,11 +498,13 @@ fn pick_start(
             rejected.push(format!("{name}: {why}"));
             continue;
         }
-        if best.as_ref().is_none_or(|b| e < b.1) {
-            best = Some((uv, e, name));
+        // Fewer non-convex quads first (the barrier cannot make them convex), then energy.
+        let bad = super::nonconvex_quads(chart, &uv);
+        if best.as_ref().is_none_or(|b| (bad, e) < (b.3, b.1)) {
+            best = Some((uv, e, name, bad));
         }
     }
-    Ok((best, rejected))
+    Ok((best.map(|(uv, e, name, _)| (uv, e, name)), rejected))
 }
 
 /// [`solve`], also returning the chart's normalised symmetric Dirichlet energy before the first
@@ -556,6 +561,23 @@ fn run(
             reason: format!("no valid (flip-free, overlap-free) start for the scaffold iterations ({})", rejected.join("; ")),
         });
         return Ok((sol, ScaffoldHistory::default()));
+    };
+    // The chart energy and the barrier cover both diagonal splits of every quad, so quads stay
+    // strictly convex (see `barrier_triangles`).
+    let barrier_tris;
+    let (tris, rest, area, total, left_out) = if chart.quads.is_empty() {
+        (tris, rest, area, total, 0)
+    } else {
+        let (b, w, left_out) = super::barrier_triangles(chart, &uv);
+        barrier_tris = b;
+        let rest: Vec<RestTriangle> = barrier_tris
+            .iter()
+            .map(|t| RestTriangle::from_3d([chart.positions[t[0] as usize], chart.positions[t[1] as usize], chart.positions[t[2] as usize]]))
+            .collect();
+        let area: Vec<f64> = rest.iter().zip(&w).map(|(r, w)| r.area * w).collect();
+        let total: f64 = area.iter().sum();
+        energy = chart_energy(&rest, &area, total, &barrier_tris, &uv);
+        (&barrier_tris, rest, area, total, left_out)
     };
     let mut history = ScaffoldHistory {
         energy: vec![energy],
@@ -806,7 +828,10 @@ fn run(
     let shift_note = (shifts > 0).then(|| {
         format!("{shifts} global step(s) factored with the diagonal shifted by up to {largest_shift:.0e} of its mean")
     });
-    let note = [Some(summary), stop_note.clone(), shift_note, pin_note].into_iter().flatten().collect::<Vec<_>>().join("; ");
+    let quad_note = (left_out > 0).then(|| {
+        format!("{left_out} quad triangle(s) of the other diagonal were not positive at the start, so those quads may stay non-convex")
+    });
+    let note = [Some(summary), stop_note.clone(), shift_note, pin_note, quad_note].into_iter().flatten().collect::<Vec<_>>().join("; ");
     if iterations == 0 && stop_note.is_some() {
         // Never "solved" without a single iteration: the start is what the chart gets.
         sol.fallback = Some(super::Fallback { method: history.start, reason: note });

@@ -33,6 +33,11 @@
 //! Without pins (or with pins that do not span more than a point) the start is scaled by the
 //! energy-optimal factor `(Σ A ‖J⁻¹‖² / Σ A ‖J‖²)^{1/4}` and translated onto the pin.
 //!
+//! Quads: the energy and the line search also cover the other diagonal's two triangles of
+//! every quad ([`super::barrier_triangles`], each of a quad's four triangles at half weight),
+//! so quads stay strictly convex whichever diagonal an exporter picks; starts are ranked by
+//! their number of non-convex quads first.
+//!
 //! Guarantee: every triangle of the result is positively oriented (the start is checked and
 //! every accepted step keeps it so); the energy history is strictly decreasing.
 //!
@@ -231,7 +236,7 @@ fn pick_start(
     let spanning = lscm::pins_span(pins);
     let start_pins: &[(u32, [f64; 2])] = if spanning { pins } else { &[] };
     let (candidates, mut rejected) = candidate_starts(chart, start_pins, options.start == SlimStart::Auto);
-    let mut best: Option<Start> = None;
+    let mut best: Option<(Vec<[f64; 2]>, f64, &'static str, usize)> = None;
     for (mut uv, name) in candidates {
         if !spanning {
             scale_optimally(ops, tris, &mut uv);
@@ -252,11 +257,13 @@ fn pick_start(
             rejected.push(format!("{name}: {} flipped or degenerate triangle(s)", bad.count()));
             continue;
         }
-        if best.as_ref().is_none_or(|b| e < b.1) {
-            best = Some((uv, e, name));
+        // Fewer non-convex quads first (the barrier cannot make them convex), then energy.
+        let bad = super::nonconvex_quads(chart, &uv);
+        if best.as_ref().is_none_or(|b| (bad, e) < (b.3, b.1)) {
+            best = Some((uv, e, name, bad));
         }
     }
-    Ok((best, rejected))
+    Ok((best.map(|(uv, e, name, _)| (uv, e, name)), rejected))
 }
 
 /// SLIM of one chart (see the module docs).
@@ -274,8 +281,7 @@ pub fn solve_with_history(
     options: &SlimOptions,
 ) -> Result<(ChartSolution, SlimHistory), ChartFailure> {
     let n = chart.positions.len();
-    let tris = &chart.triangles;
-    let ops = TriangleOperators::new(&chart.positions, tris);
+    let ops = TriangleOperators::new(&chart.positions, &chart.triangles);
     let t_start = Instant::now();
     let (start, rejected) = pick_start(chart, pins, &ops, options)?;
     let start_seconds = t_start.elapsed().as_secs_f64();
@@ -290,6 +296,19 @@ pub fn solve_with_history(
             ),
         });
         return Ok((sol, SlimHistory::default()));
+    };
+    // The barrier covers both diagonal splits of every quad (see `barrier_triangles`).
+    let (barrier, weights, left_out) = super::barrier_triangles(chart, &uv);
+    let (tris, ops) = if chart.quads.is_empty() {
+        (&chart.triangles, ops)
+    } else {
+        let mut ops = TriangleOperators::new(&chart.positions, &barrier);
+        for (a, w) in ops.area.iter_mut().zip(&weights) {
+            *a *= w;
+        }
+        ops.total_area = ops.area.iter().sum();
+        energy = symmetric_dirichlet(&ops, &barrier, &uv);
+        (&barrier, ops)
     };
     let mut history = SlimHistory { energy: vec![energy], start: start_name, start_seconds, ..Default::default() };
 
@@ -389,6 +408,9 @@ pub fn solve_with_history(
     let mut note = format!("symmetric Dirichlet {energy:.6} after {iterations} iteration(s), started from {start_name}");
     if let Some(reason) = stopped {
         note = format!("{note}; stopped early, the global step failed: {reason}");
+    }
+    if left_out > 0 {
+        note = format!("{note}; {left_out} quad triangle(s) of the other diagonal were not positive at the start, so those quads may stay non-convex");
     }
     let sol = ChartSolution { uv, iterations, residual: change, note: Some(note), fallback: None };
     Ok((sol, history))

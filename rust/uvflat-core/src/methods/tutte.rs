@@ -1,4 +1,4 @@
-//! `tutte`: fixed-boundary barycentric map with uniform weights (every neighbour counts 1). Guarantee: on the default circle boundary no triangle flips (Tutte's embedding theorem; positive weights, strictly convex boundary).
+//! `tutte`: fixed-boundary barycentric map with uniform weights (every neighbour counts 1). Guarantee: on the default circle boundary no triangle flips (Tutte's embedding theorem; positive weights, strictly convex boundary). The weights live on the polygon graph (an n-gon's diagonals are not edges), so quads and n-gons come out convex, positive under any triangulation (see [`super::fixed_boundary::laplacian_triplets_with_polygons`]).
 //!
 //! Paper: W. T. Tutte, "How to draw a graph", Proc. London Math. Soc. 1963.
 //!

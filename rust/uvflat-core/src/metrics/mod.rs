@@ -4,7 +4,10 @@
 //! its plane) to its UV triangle, with singular values σ1 ≥ σ2. Before measuring, each chart's
 //! UVs are scaled so its UV area equals its 3D area. Weights are 3D areas over the total.
 //! * flips: triangles whose signed UV area has the opposite sign to the chart's majority,
-//!   plus zero-area UV triangles;
+//!   plus zero-area UV triangles ([`is_flipped`]). The triangles are the render triangulation
+//!   when one is given (else the core's own), and a quad counts as folded when either of its
+//!   two diagonal splits has such a triangle: exporters and engines choose their own diagonal,
+//!   so a flip-free quad is a strictly convex UV quad;
 //! * overlap: the chart's UV boundary crosses or touches itself;
 //! * conformal Σ w σ1/σ2; area Σ w max(σ1σ2, 1/(σ1σ2)); symmetric Dirichlet
 //!   Σ w (σ1² + σ2² + σ1⁻² + σ2⁻²)/4. All are 1 for an isometry; a zero-area UV triangle with
@@ -12,7 +15,7 @@
 //!   still counted as flips when their UV triangle has zero area); a chart with no 3D area at
 //!   all has every triangle counted as a flip and infinite distortion, never NaN.
 
-use crate::charts::build_charts;
+use crate::charts::{build_charts_with, FaceTriangulation, Quad};
 use crate::error::{Result, UvError};
 use crate::geometry::{cross2, local_frame, signed_area_2d, triangle_area};
 
@@ -121,17 +124,15 @@ pub fn flipped_triangles(triangles: &[[u32; 3]], uv: &[[f64; 2]]) -> Vec<bool> {
     areas.iter().map(|&a| !(a * majority > eps)).collect()
 }
 
-/// Whether one UV triangle is a sliver at round-off level of its own edges (|sin| of its
-/// angle at the first corner ≤ 1e-12). A shape test for a single triangle, kept for callers
-/// that look at one triangle alone; flips are counted by [`flipped_triangles`], the one
-/// definition, which also sees the chart's scale and majority orientation.
+/// A single triangle's shape test: its doubled signed area, taken with the chart's
+/// orientation, is not above round-off level of `scale`, the product of two of its edge
+/// lengths (`|e1| |e2|`, the largest the doubled area can be). Used where one triangle or one
+/// quad is looked at alone (the methods' convex-quad checks, [`quad_folds`]); the flips a
+/// report or [`measure`] counts come from [`flipped_triangles`], which also sees the chart's
+/// scale and majority orientation.
 #[inline]
-pub fn uv_degenerate(q: [[f64; 2]; 3]) -> bool {
-    let e1 = [q[1][0] - q[0][0], q[1][1] - q[0][1]];
-    let e2 = [q[2][0] - q[0][0], q[2][1] - q[0][1]];
-    let c = cross2(e1, e2).abs();
-    let l = (e1[0].hypot(e1[1])) * (e2[0].hypot(e2[1]));
-    c <= 1e-12 * l || l == 0.0
+pub fn is_flipped(signed_area: f64, scale: f64) -> bool {
+    !(signed_area > 1e-12 * scale) || scale == 0.0
 }
 
 /// Number of [`flipped_triangles`].
@@ -198,6 +199,36 @@ pub fn triangle_distortion(positions: &[[f64; 3]], triangles: &[[u32; 3]], uv: &
 }
 
 /// Measure one chart given per-vertex positions and UVs over its triangles.
+/// Doubled signed area and scale (`|e1| |e2|`) of a UV triangle, for [`is_flipped`].
+#[inline]
+fn area_and_scale(q: [[f64; 2]; 3]) -> (f64, f64) {
+    let e1 = [q[1][0] - q[0][0], q[1][1] - q[0][1]];
+    let e2 = [q[2][0] - q[0][0], q[2][1] - q[0][1]];
+    (cross2(e1, e2), (e1[0].hypot(e1[1])) * (e2[0].hypot(e2[1])))
+}
+
+/// Whether a UV triangle is degenerate (its area is at round-off level of its edges), in
+/// either orientation.
+#[inline]
+pub fn uv_degenerate(q: [[f64; 2]; 3]) -> bool {
+    let (c, l) = area_and_scale(q);
+    is_flipped(c.abs(), l)
+}
+
+/// Number of folded triangles of one quad with `orientation` (+1 or −1): the larger count
+/// of flipped triangles ([`is_flipped`]) over its two diagonal splits; 0 exactly when the UV
+/// quad is strictly convex with that orientation.
+pub fn quad_folds(q: &Quad, uv: &[[f64; 2]], orientation: f64) -> usize {
+    let t = q.all_splits();
+    let f = |k: usize| {
+        let (a, l) = area_and_scale([uv[t[k][0] as usize], uv[t[k][1] as usize], uv[t[k][2] as usize]]);
+        is_flipped(orientation * a, l) as usize
+    };
+    (f(0) + f(1)).max(f(2) + f(3))
+}
+
+/// Measure one chart given per-vertex positions and UVs over its triangles (no quads: every
+/// triangle counts on its own; see [`chart_metrics_with_quads`]).
 pub fn chart_metrics(
     positions: &[[f64; 3]],
     triangles: &[[u32; 3]],
@@ -268,6 +299,43 @@ pub fn chart_metrics(
 /// 4 · [`ZERO_AREA_RELATIVE`]): such a triangle makes the distortion measures infinite.
 fn uv_zero_area(q: [[f64; 2]; 3]) -> bool {
     signed_area_2d(q).abs() <= 4.0 * ZERO_AREA_RELATIVE
+}
+
+/// [`chart_metrics`] with the chart's quad faces (whose own two triangles are among
+/// `triangles`): a quad counts as folded on the split with more flipped triangles, so a
+/// "no flips" quad is strictly convex in UV whichever diagonal a renderer or exporter picks.
+/// Flips follow the one definition ([`flipped_triangles`]) over the chart's other triangles
+/// and both splits of every quad; distortion is measured on `triangles`.
+pub fn chart_metrics_with_quads(
+    positions: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    quads: &[Quad],
+    uv: &[[f64; 2]],
+    boundary_loops: &[Vec<u32>],
+) -> ChartMetrics {
+    let mut m = chart_metrics(positions, triangles, uv, boundary_loops);
+    if quads.is_empty() || !(m.area_3d > 0.0) {
+        return m;
+    }
+    let mut in_quad = vec![false; triangles.len()];
+    for q in quads {
+        for &t in &q.triangles {
+            in_quad[t as usize] = true;
+        }
+    }
+    let mut all: Vec<[u32; 3]> = triangles.iter().zip(&in_quad).filter(|(_, &q)| !q).map(|(t, _)| *t).collect();
+    let singles = all.len();
+    for q in quads {
+        all.extend(q.all_splits());
+    }
+    let flipped = flipped_triangles(&all, uv);
+    let mut flips = flipped[..singles].iter().filter(|&&f| f).count();
+    for k in 0..quads.len() {
+        let f = &flipped[singles + 4 * k..singles + 4 * k + 4];
+        flips += (f[0] as usize + f[1] as usize).max(f[2] as usize + f[3] as usize);
+    }
+    m.flips = flips;
+    m
 }
 
 /// Whether the UV boundary (all loops of one chart) crosses or touches itself anywhere other
@@ -516,8 +584,26 @@ pub fn measure(
     uv: &[[f64; 2]],
     selected: Option<&[bool]>,
 ) -> Result<MeshMetrics> {
-    let input = crate::unwrap::MeshInput { positions, corner_verts, face_sizes, seams: &[], selected, pins: &[] };
+    measure_with_triangles(positions, corner_verts, face_sizes, uv, selected, &[])
+}
+
+/// [`measure`] with the render triangulation (`triangles`: corner index triples, Blender's
+/// `mesh.loop_triangles`; empty for the core's own): n-gons are measured on those triangles,
+/// and quads on both diagonal splits either way.
+///
+/// Errors: those of [`measure`], and [`UvError::RenderTriangle`] for a bad triple (see
+/// [`FaceTriangulation::new`]).
+pub fn measure_with_triangles(
+    positions: &[[f64; 3]],
+    corner_verts: &[u32],
+    face_sizes: &[u32],
+    uv: &[[f64; 2]],
+    selected: Option<&[bool]>,
+    triangles: &[[u32; 3]],
+) -> Result<MeshMetrics> {
+    let input = crate::unwrap::MeshInput { positions, corner_verts, face_sizes, selected, ..Default::default() };
     let mesh = crate::validate::validate_input(&input, None, None)?;
+    let render = if triangles.is_empty() { None } else { Some(FaceTriangulation::new(&mesh, triangles)?) };
     if uv.len() != mesh.n_corners() {
         return Err(UvError::Shape {
             what: "uv",
@@ -573,7 +659,7 @@ pub fn measure(
         }
         i = j;
     }
-    let charts = build_charts(&mesh, &seams, selected);
+    let charts = build_charts_with(&mesh, &seams, selected, render.as_ref());
     let measured: Vec<(ChartMetrics, Vec<(u32, [f64; 2])>)> = {
         use rayon::prelude::*;
         charts
@@ -583,7 +669,7 @@ pub fn measure(
                 for &(c, v) in &ch.corner_vertex {
                     vuv[v as usize] = uv[c as usize];
                 }
-                let mut m = chart_metrics(&ch.positions, &ch.triangles, &vuv, &ch.boundary_loops);
+                let mut m = chart_metrics_with_quads(&ch.positions, &ch.triangles, &ch.quads, &vuv, &ch.boundary_loops);
                 m.faces = ch.faces.len();
                 (m, face_distortion(ch, &vuv))
             })

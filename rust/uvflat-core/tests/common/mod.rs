@@ -15,9 +15,7 @@ impl Soup {
             positions: &self.positions,
             corner_verts: &self.corner_verts,
             face_sizes: &self.face_sizes,
-            seams: &[],
-            selected: None,
-            pins: &[],
+            ..Default::default()
         }
     }
 }

@@ -31,6 +31,7 @@ from ._uvflat import (
     PinError,
     RepeatedVertexError,
     SeamError,
+    TriangleError,
     UnwrapResult,
     UvflatError,
     VertexIndexError,
@@ -55,6 +56,7 @@ __all__ = [
     "PinError",
     "RepeatedVertexError",
     "SeamError",
+    "TriangleError",
     "UnwrapResult",
     "UvflatError",
     "VertexIndexError",
@@ -66,7 +68,8 @@ __all__ = [
 
 
 def unwrap(positions, corner_verts, face_sizes, *, method="lscm", seams=None, selected=None,
-           pins=None, pin_uvs=None, fit_to=None, auto_seams=True, max_stretch=2.0, max_cones=8,
+           pins=None, pin_uvs=None, fit_to=None, triangles=None, auto_seams=True, max_stretch=2.0,
+           max_cones=8,
            avoid_vertices=None, sharp_angle=None, progress=None, **options):
     """Unwrap the selected faces of a polygon mesh into per-corner UVs.
 
@@ -91,6 +94,11 @@ def unwrap(positions, corner_verts, face_sizes, *, method="lscm", seams=None, se
         pin_uvs: (P, 2) the UVs of the pinned corners (required with ``pins``).
         fit_to: (C, 2) previous UVs: each unpinned chart is fitted (scale, rotation,
             translation) onto them instead of being area-scaled at the origin.
+        triangles: (T, 3) the render triangulation as corner index triples (Blender's
+            ``mesh.loop_triangles`` ``loops``): faces of 4+ corners are split this way, so
+            flips are counted (and avoided) on the triangles Blender shows; every face needs
+            exactly corners - 2 rows. Quads count as folded when either diagonal split has a
+            flipped triangle, with or without this argument.
         auto_seams: cut closed and higher-genus charts automatically (default True); with
             False they fail with a "mark seams" reason.
         max_stretch: how much the length scale may vary inside one island (> 1, default
@@ -142,6 +150,6 @@ def unwrap(positions, corner_verts, face_sizes, *, method="lscm", seams=None, se
     """
     return _native_unwrap(positions, corner_verts, face_sizes, method=method, seams=seams,
                           selected=selected, pins=pins, pin_uvs=pin_uvs, fit_to=fit_to,
-                          auto_seams=auto_seams, max_stretch=max_stretch, max_cones=max_cones,
+                          triangles=triangles, auto_seams=auto_seams, max_stretch=max_stretch, max_cones=max_cones,
                           avoid_vertices=avoid_vertices, sharp_angle=sharp_angle,
                           progress=progress, **options)

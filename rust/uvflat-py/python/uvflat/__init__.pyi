@@ -104,7 +104,8 @@ class ChartReport:
         """Final residual or energy change of the method (0 for direct solves)."""
     @property
     def flips(self) -> int:
-        """Flipped or zero-area UV triangles (0 for failed charts)."""
+        """Flipped or zero-area UV triangles (0 for failed charts); a quad that is not
+        strictly convex in UV counts as folded (either diagonal split flips)."""
     @property
     def overlap(self) -> bool:
         """Whether the chart's UV boundary crosses itself."""
@@ -226,6 +227,7 @@ def unwrap(
     pins: _Ints | None = None,
     pin_uvs: _Floats | None = None,
     fit_to: _Floats | None = None,
+    triangles: _Ints | None = None,
     auto_seams: bool = True,
     max_stretch: float = 2.0,
     max_cones: int = 8,
@@ -255,6 +257,12 @@ def unwrap(
         pin_uvs: (P, 2) the UVs of the pinned corners (required with ``pins``).
         fit_to: (C, 2) previous UVs: each unpinned chart is fitted (scale, rotation,
             translation) onto them instead of being area-scaled at the origin.
+        triangles: (T, 3) the render triangulation as corner index triples (Blender's
+            ``mesh.loop_triangles`` ``loops``): faces of 4+ corners are split this way
+            instead of by the core's own ear clipping, so flips are counted (and avoided)
+            on the triangles Blender shows. Every face needs exactly corners - 2 rows.
+            Quads count as folded (``flips``) when either diagonal split has a flipped
+            triangle, with or without this argument.
         **options: the method's own options, see :class:`UnwrapOptions`: tutte, harmonic,
             mean_value: ``boundary``; lscm: none; spectral, arap, mips, scaffold:
             ``max_iterations``, ``tolerance``; slim: those and ``start``; abf: ``solver``,
@@ -283,6 +291,8 @@ def unwrap(
         InputError: wrong shape, dtype or length; a non-finite ``fit_to`` UV.
         VertexIndexError, NonFiniteError, FaceSizeError, RepeatedVertexError, SeamError:
             malformed mesh (all subclasses of MeshError).
+        TriangleError: a ``triangles`` row names a missing corner, corners of two faces,
+            or a face does not get exactly corners - 2 rows triangulating it (a MeshError).
         PinError: a pin names a missing corner or has a non-finite UV.
         OptionError: unknown method, unknown option or bad option value.
         AngleSumError: a bad ``angle_sums`` entry (an OptionError naming entry and vertex).
@@ -315,6 +325,7 @@ def metrics(
     uv: _Floats,
     *,
     selected: _Bools | None = None,
+    triangles: _Ints | None = None,
 ) -> Metrics:
     """Measure a per-corner UV map: islands, flipped triangles, overlaps and distortion.
 
@@ -327,6 +338,9 @@ def metrics(
         face_sizes: (F,) corners per face.
         uv: (C, 2) UV of every corner.
         selected: (F,) faces to measure; default all.
+        triangles: (T, 3) the render triangulation (see :func:`unwrap`); n-gons are
+            measured on these triangles. A quad counts as folded when either of its
+            diagonal splits has a flipped triangle (not strictly convex in UV).
 
     Raises:
         InputError: wrong shape, dtype or length; a non-finite UV (``err.corner``).
@@ -383,6 +397,17 @@ class SeamError(MeshError):
     """Row of ``seams``."""
     vertex: int
     n_vertices: int
+
+class TriangleError(MeshError):
+    """A row of ``triangles`` names a missing corner, corners of two faces or one corner
+    twice, or a face is not triangulated by exactly corners - 2 of its rows."""
+
+    triangle: int
+    """Row of ``triangles``."""
+    corners: list[int] | None
+    """The row's corners."""
+    reason: str
+    """What is wrong."""
 
 class PinError(UvflatError, ValueError):
     """A pin refers to a corner that does not exist, or its UV is not finite."""

@@ -1,0 +1,288 @@
+//! Quads under any triangulation: metrics count a quad folded when either diagonal split has
+//! a flipped triangle, and the methods that promise no flips keep every quad strictly convex.
+
+mod common;
+
+use uvflat_core::metrics::{measure, measure_with_triangles};
+use uvflat_core::{unwrap, Method, MeshInput, OptionValue, UnwrapOptions, UvError};
+
+/// Small deterministic generator (xorshift), uniform in [0, 1).
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> f64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// A noisy, curved quad grid (a saddle with bumps and some dart-shaped quads), `n × n` quads, and random seams
+/// that cut it into charts (random walks along grid edges from the border).
+fn curved_quad_grid(n: usize, seed: u64) -> (common::Soup, Vec<[u32; 2]>) {
+    let mut rng = Rng(seed);
+    let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
+    let mut positions = Vec::new();
+    for j in 0..=n {
+        for i in 0..=n {
+            let (x, y) = (i as f64 / n as f64 * 2.0 - 1.0, j as f64 / n as f64 * 2.0 - 1.0);
+            let h = 2.0 / n as f64;
+            let (mut jx, mut jy) = (0.3 * h * (rng.next() - 0.5), 0.3 * h * (rng.next() - 0.5));
+            // Every few interior vertices move 0.6 of the way along their quad's diagonal:
+            // that quad becomes a dart (concave in 3D, convex only by moving it in UV), so
+            // a faithful map folds it on one diagonal.
+            if i > 0 && j > 0 && i < n - 1 && j < n - 1 && (7 * i + 3 * j) % 11 == 0 {
+                jx = 0.6 * h;
+                jy = 0.6 * h;
+            }
+            let z = 0.6 * (x * x - y * y) + 0.2 * (3.0 * x).sin() * (2.0 * y).cos();
+            positions.push([x + jx, y + jy, z]);
+        }
+    }
+    let mut corner_verts = Vec::new();
+    let mut face_sizes = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            corner_verts.extend([id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)]);
+            face_sizes.push(4);
+        }
+    }
+    let mut seams = Vec::new();
+    for w in 0..4 {
+        let (mut i, mut j) = if w % 2 == 0 { (0, (rng.next() * n as f64) as usize) } else { ((rng.next() * n as f64) as usize, 0) };
+        for _ in 0..n {
+            let (ni, nj) = if rng.next() < 0.5 { ((i + 1).min(n), j) } else { (i, (j + 1).min(n)) };
+            if (ni, nj) == (i, j) {
+                break;
+            }
+            seams.push([id(i, j), id(ni, nj)]);
+            (i, j) = (ni, nj);
+        }
+    }
+    (common::Soup { positions, corner_verts, face_sizes }, seams)
+}
+
+/// Quads that are not strictly convex in UV (either orientation of the chart counts as the
+/// right one: the chart's majority sign), computed here from per-corner UVs, independently
+/// of the crate's metrics.
+fn nonconvex_quads(soup: &common::Soup, uv: &[[f64; 2]], face_chart: &[i32]) -> usize {
+    let cross = |a: [f64; 2], b: [f64; 2], c: [f64; 2]| (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+    // Chart orientation: sign of the summed signed area.
+    let n_charts = face_chart.iter().copied().max().unwrap_or(-1) + 1;
+    let mut sign = vec![0.0; n_charts as usize];
+    let mut start = 0;
+    for (f, &s) in soup.face_sizes.iter().enumerate() {
+        let q: Vec<[f64; 2]> = (start..start + s as usize).map(|c| uv[c]).collect();
+        if face_chart[f] >= 0 {
+            for k in 1..q.len() - 1 {
+                sign[face_chart[f] as usize] += cross(q[0], q[k], q[k + 1]);
+            }
+        }
+        start += s as usize;
+    }
+    let mut bad = 0;
+    let mut start = 0;
+    for (f, &s) in soup.face_sizes.iter().enumerate() {
+        if s == 4 && face_chart[f] >= 0 {
+            let q: Vec<[f64; 2]> = (start..start + 4).map(|c| uv[c]).collect();
+            let o = sign[face_chart[f] as usize].signum();
+            let tris = [[0, 1, 2], [0, 2, 3], [0, 1, 3], [1, 2, 3]];
+            if tris.iter().any(|t| !(o * cross(q[t[0]], q[t[1]], q[t[2]]) > 0.0)) {
+                bad += 1;
+            }
+        }
+        start += s as usize;
+    }
+    bad
+}
+
+fn run(soup: &common::Soup, seams: &[[u32; 2]], method: &str) -> uvflat_core::Unwrapped {
+    let method = Method::parse(method, &[]).unwrap();
+    let input = MeshInput { seams, ..soup.input() };
+    unwrap(&input, &UnwrapOptions { method, ..Default::default() }).unwrap()
+}
+
+#[test]
+fn a_concave_quad_counts_as_one_fold_on_either_split() {
+    // 3D: a unit square. UV: a dart whose corner 2 is reflex; split 0-2 is positive, 1-3 folds.
+    let p = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+    let cv = vec![0, 1, 2, 3];
+    let fs = vec![4];
+    let dart = vec![[0.0, 0.0], [2.0, 0.0], [0.5, 0.5], [0.0, 2.0]];
+    assert_eq!(measure(&p, &cv, &fs, &dart, None).unwrap().flips, 1);
+    assert_eq!(measure_with_triangles(&p, &cv, &fs, &dart, None, &[[0, 1, 2], [0, 2, 3]]).unwrap().flips, 1);
+    assert_eq!(measure_with_triangles(&p, &cv, &fs, &dart, None, &[[0, 1, 3], [1, 2, 3]]).unwrap().flips, 1);
+    // The same quad made convex: no fold on either split.
+    let square = vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+    assert_eq!(measure_with_triangles(&p, &cv, &fs, &square, None, &[[0, 1, 3], [1, 2, 3]]).unwrap().flips, 0);
+    // A straight corner (three collinear corners) is not strictly convex: one zero-area triangle.
+    let straight = vec![[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [0.0, 1.0]];
+    assert_eq!(measure(&p, &cv, &fs, &straight, None).unwrap().flips, 1);
+}
+
+#[test]
+fn a_pentagon_is_measured_on_the_given_triangles() {
+    // A pentagon whose UV is concave at corner 3: the fan from corner 0 folds, the fan from
+    // corner 3 does not.
+    let p: Vec<[f64; 3]> = (0..5).map(|k| {
+        let a = std::f64::consts::TAU * k as f64 / 5.0;
+        [a.cos(), a.sin(), 0.0]
+    }).collect();
+    let cv = vec![0, 1, 2, 3, 4];
+    let fs = vec![5];
+    let uv = vec![[0.0, 0.0], [2.0, 0.0], [2.0, 2.0], [1.0, 0.5], [0.0, 2.0]];
+    let fan0 = [[0u32, 1, 2], [0, 2, 3], [0, 3, 4]];
+    let fan3 = [[3u32, 4, 0], [3, 0, 1], [3, 1, 2]];
+    let f0 = measure_with_triangles(&p, &cv, &fs, &uv, None, &fan0).unwrap().flips;
+    let f3 = measure_with_triangles(&p, &cv, &fs, &uv, None, &fan3).unwrap().flips;
+    assert!(f0 >= 1, "fan from the convex corner 0 crosses the reflex corner 3: {f0}");
+    assert_eq!(f3, 0, "fan from the reflex corner is valid");
+}
+
+#[test]
+fn bad_render_triangles_are_typed_errors_naming_the_triple() {
+    let (soup, _) = curved_quad_grid(2, 7);
+    let ok: Vec<[u32; 3]> = (0..4u32).flat_map(|f| [[4 * f, 4 * f + 1, 4 * f + 2], [4 * f, 4 * f + 2, 4 * f + 3]]).collect();
+    let go = |t: &[[u32; 3]]| unwrap(&MeshInput { triangles: t, ..soup.input() }, &UnwrapOptions::default());
+    assert!(go(&ok).is_ok());
+    let mut bad = ok.clone();
+    bad[3] = [4, 5, 99];
+    assert!(matches!(go(&bad), Err(UvError::RenderTriangle { triangle: 3, .. })), "{:?}", go(&bad).err());
+    let mut bad = ok.clone();
+    bad[5] = [8, 9, 12];
+    assert!(matches!(go(&bad), Err(UvError::RenderTriangle { triangle: 5, .. })));
+    let bad = &ok[..7];
+    assert!(matches!(go(bad), Err(UvError::RenderTriangle { .. })));
+}
+
+#[test]
+fn promising_methods_keep_every_quad_strictly_convex() {
+    let (soup, seams) = curved_quad_grid(24, 0x9e37_79b9_7f4a_7c15);
+    // The surface is hard enough that LSCM (which promises nothing) folds quads on one
+    // diagonal, so the check below can fail.
+    let lscm = run(&soup, &seams, "lscm");
+    let lscm_bad = nonconvex_quads(&soup, &lscm.uv, &lscm.face_chart);
+    eprintln!("lscm leaves {lscm_bad} non-convex quads");
+    assert!(lscm_bad > 0, "the test surface should make LSCM fold some quad");
+    for method in ["tutte", "mean_value", "slim", "mips", "scaffold", "abf"] {
+        let r = run(&soup, &seams, method);
+        let bad = nonconvex_quads(&soup, &r.uv, &r.face_chart);
+        let reported: usize = r.charts.iter().map(|c| c.flips).sum();
+        assert_eq!(bad, 0, "{method}: {bad} non-convex quads; reports {:?}", r.charts.iter().map(|c| &c.reason).collect::<Vec<_>>());
+        assert_eq!(reported, 0, "{method}: reports {reported} flips");
+        assert!(r.charts.iter().all(|c| c.status != uvflat_core::ChartStatus::Failed), "{method}");
+    }
+    // The metrics count what the independent check counts for LSCM.
+    let reported: usize = lscm.charts.iter().map(|c| c.flips).sum();
+    assert!(reported >= lscm_bad, "lscm: reported {reported} < {lscm_bad} non-convex quads");
+}
+
+#[test]
+fn the_render_split_is_used_and_methods_stay_convex_under_it() {
+    let (soup, seams) = curved_quad_grid(12, 42);
+    // Split every quad along the diagonal the core would not necessarily pick: 1-3.
+    let tris: Vec<[u32; 3]> = (0..soup.face_sizes.len() as u32).flat_map(|f| [[4 * f, 4 * f + 1, 4 * f + 3], [4 * f + 1, 4 * f + 2, 4 * f + 3]]).collect();
+    for method in ["mean_value", "slim", "mips"] {
+        let input = MeshInput { seams: &seams, triangles: &tris, ..soup.input() };
+        let m = Method::parse(method, &[("max_iterations".to_string(), OptionValue::Int(5))].into_iter().filter(|_| method != "mean_value").collect::<Vec<_>>()).unwrap();
+        let r = unwrap(&input, &UnwrapOptions { method: m, ..Default::default() }).unwrap();
+        assert_eq!(nonconvex_quads(&soup, &r.uv, &r.face_chart), 0, "{method}");
+        let measured = measure_with_triangles(&soup.positions, &soup.corner_verts, &soup.face_sizes, &r.uv, None, &tris).unwrap();
+        assert_eq!(measured.flips, 0, "{method}");
+    }
+}
+
+#[test]
+fn abf_repairs_its_few_non_convex_quads_in_place() {
+    let (soup, seams) = curved_quad_grid(24, 0x9e37_79b9_7f4a_7c15);
+    let r = run(&soup, &seams, "abf");
+    assert_eq!(nonconvex_quads(&soup, &r.uv, &r.face_chart), 0);
+    for c in &r.charts {
+        assert_eq!(c.status, uvflat_core::ChartStatus::Solved, "{:?}", c.reason);
+        assert_eq!(c.method, "abf");
+    }
+    // The repair had something to do on this surface (else this test checks nothing).
+    assert!(
+        r.charts.iter().any(|c| c.reason.as_deref().is_some_and(|n| n.contains("made strictly convex"))),
+        "{:?}",
+        r.charts.iter().map(|c| &c.reason).collect::<Vec<_>>()
+    );
+}
+
+/// A brick wall of hexagons (pairs of grid quads merged, rows offset), noisy and curved, with
+/// some middle vertices pushed across their hexagon: concave n-gons in 3D.
+fn brick_hexagons(n: usize, seed: u64) -> common::Soup {
+    let mut rng = Rng(seed);
+    let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
+    let h = 2.0 / n as f64;
+    let mut positions = Vec::new();
+    for j in 0..=n {
+        for i in 0..=n {
+            let (mut x, mut y) = (i as f64 * h - 1.0, j as f64 * h - 1.0);
+            x += 0.3 * h * (rng.next() - 0.5);
+            y += 0.3 * h * (rng.next() - 0.5);
+            if i > 0 && j > 0 && i < n && j < n && (5 * i + 3 * j) % 7 == 0 {
+                y += 0.7 * h;
+            }
+            positions.push([x, y, 0.5 * (x * x - y * y) + 0.2 * (3.0 * x).sin()]);
+        }
+    }
+    let (mut corner_verts, mut face_sizes) = (Vec::new(), Vec::new());
+    for j in 0..n {
+        let mut i = 0;
+        if j % 2 == 1 {
+            corner_verts.extend([id(0, j), id(1, j), id(1, j + 1), id(0, j + 1)]);
+            face_sizes.push(4);
+            i = 1;
+        }
+        while i < n {
+            if i + 2 <= n {
+                corner_verts.extend([id(i, j), id(i + 1, j), id(i + 2, j), id(i + 2, j + 1), id(i + 1, j + 1), id(i, j + 1)]);
+                face_sizes.push(6);
+                i += 2;
+            } else {
+                corner_verts.extend([id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)]);
+                face_sizes.push(4);
+                i += 1;
+            }
+        }
+    }
+    common::Soup { positions, corner_verts, face_sizes }
+}
+
+/// Faces whose UV polygon is not strictly convex (some corner does not turn left, with the
+/// chart's orientation).
+fn nonconvex_faces(soup: &common::Soup, uv: &[[f64; 2]]) -> usize {
+    let cross = |a: [f64; 2], b: [f64; 2], c: [f64; 2]| (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+    let mut total = 0.0;
+    let mut start = 0;
+    for &s in &soup.face_sizes {
+        let q = &uv[start..start + s as usize];
+        total += (1..q.len() - 1).map(|k| cross(q[0], q[k], q[k + 1])).sum::<f64>();
+        start += s as usize;
+    }
+    let o = total.signum();
+    let mut bad = 0;
+    let mut start = 0;
+    for &s in &soup.face_sizes {
+        let m = s as usize;
+        let q = &uv[start..start + m];
+        if (0..m).any(|k| !(o * cross(q[(k + m - 1) % m], q[k], q[(k + 1) % m]) > 0.0)) {
+            bad += 1;
+        }
+        start += m;
+    }
+    bad
+}
+
+#[test]
+fn barycentric_methods_make_every_ngon_convex() {
+    let soup = brick_hexagons(16, 0x2545_f491_4f6c_dd1d);
+    let lscm = run(&soup, &[], "lscm");
+    assert!(nonconvex_faces(&soup, &lscm.uv) > 0, "the test surface should give LSCM concave faces");
+    for method in ["tutte", "mean_value"] {
+        let r = run(&soup, &[], method);
+        assert_eq!(nonconvex_faces(&soup, &r.uv), 0, "{method}");
+        assert_eq!(r.charts.iter().map(|c| c.flips).sum::<usize>(), 0, "{method}");
+    }
+}
