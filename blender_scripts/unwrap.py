@@ -283,6 +283,8 @@ def check_args(args, methods, core_methods):
                   "shape_method": args.shape_method.upper(), "rotate": not args.no_rotate,
                   "correct_aspect": not args.no_correct_aspect}
     defaults = methods.common_properties()
+    if not math.isfinite(args.margin):
+        raise UsageError(f"--margin {args.margin}: must be a finite number")
     _check_range("--margin", args.margin, defaults["margin"])
     if not (math.isfinite(args.max_stretch) and args.max_stretch > 1.0):
         raise UsageError(f"--max-stretch {args.max_stretch}: must be a finite number greater than 1")
