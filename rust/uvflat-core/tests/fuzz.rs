@@ -292,7 +292,14 @@ impl Stats {
 #[test]
 fn random_meshes_keep_every_promise() {
     let config = ProptestConfig { cases: cases(), failure_persistence: None, ..ProptestConfig::default() };
-    let mut runner = proptest::test_runner::TestRunner::new(config);
+    // The default (CI) run is reproducible: a fixed seed. A long run (UVFLAT_FUZZ_CASES set)
+    // draws a fresh seed every time, so repeated long runs explore new cases.
+    let mut runner = if std::env::var_os("UVFLAT_FUZZ_CASES").is_some() {
+        proptest::test_runner::TestRunner::new(config)
+    } else {
+        let rng = proptest::test_runner::TestRng::deterministic_rng(config.rng_algorithm);
+        proptest::test_runner::TestRunner::new_with_rng(config, rng)
+    };
     let stats = Stats::default();
     let outcome = runner.run(&case(), |c| run_case(&c, &stats));
     for (k, v) in stats.0.lock().unwrap().iter() {

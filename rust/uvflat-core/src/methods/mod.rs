@@ -487,9 +487,9 @@ fn defect(chart: &Chart, uv: &[[f64; 2]], promise: bool, no_overlap: bool) -> Op
         return Some(format!("the solve produced a non-finite UV at mesh vertex {}", chart.mesh_vertex[i]));
     }
     if promise {
-        let flips = crate::metrics::count_flips(&chart.triangles, uv);
+        let flips = crate::metrics::count_flips_with_quads(&chart.triangles, &chart.quads, uv);
         if flips > 0 {
-            return Some(format!("the map has {flips} flipped or zero-area triangle(s) (degenerate 3D triangles?)"));
+            return Some(format!("the map has {flips} flipped or zero-area triangle(s) or folded quad(s) (degenerate 3D triangles?)"));
         }
         if no_overlap && crate::metrics::boundary_self_overlap(uv, &chart.boundary_loops) {
             return Some("the map's boundary crosses itself".into());
@@ -551,7 +551,7 @@ pub fn solve(method: &Method, chart: &Chart, pins: &[(u32, [f64; 2])]) -> std::r
         let Some((name, mut s)) = found else {
             return Err(ChartFailure(if last == why { why } else { format!("{why}; fallback {last}") }));
         };
-        let flips = crate::metrics::count_flips(&unit.triangles, &s.uv);
+        let flips = crate::metrics::count_flips_with_quads(&unit.triangles, &unit.quads, &s.uv);
         let mut reason = format!("{} rejected: {why}", method.name());
         if flips > 0 {
             reason.push_str(&format!("; the fallback still has {flips} flipped triangle(s)"));

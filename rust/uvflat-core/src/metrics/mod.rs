@@ -301,21 +301,12 @@ fn uv_zero_area(q: [[f64; 2]; 3]) -> bool {
     signed_area_2d(q).abs() <= 4.0 * ZERO_AREA_RELATIVE
 }
 
-/// [`chart_metrics`] with the chart's quad faces (whose own two triangles are among
-/// `triangles`): a quad counts as folded on the split with more flipped triangles, so a
-/// "no flips" quad is strictly convex in UV whichever diagonal a renderer or exporter picks.
-/// Flips follow the one definition ([`flipped_triangles`]) over the chart's other triangles
-/// and both splits of every quad; distortion is measured on `triangles`.
-pub fn chart_metrics_with_quads(
-    positions: &[[f64; 3]],
-    triangles: &[[u32; 3]],
-    quads: &[Quad],
-    uv: &[[f64; 2]],
-    boundary_loops: &[Vec<u32>],
-) -> ChartMetrics {
-    let mut m = chart_metrics(positions, triangles, uv, boundary_loops);
-    if quads.is_empty() || !(m.area_3d > 0.0) {
-        return m;
+/// Flipped triangles of a chart by the one definition ([`flipped_triangles`]) over its
+/// triangles that are not in a quad and both diagonal splits of every quad, a quad counting
+/// the flips of its worse split: 0 means every quad is strictly convex in UV.
+pub fn count_flips_with_quads(triangles: &[[u32; 3]], quads: &[Quad], uv: &[[f64; 2]]) -> usize {
+    if quads.is_empty() {
+        return count_flips(triangles, uv);
     }
     let mut in_quad = vec![false; triangles.len()];
     for q in quads {
@@ -334,6 +325,26 @@ pub fn chart_metrics_with_quads(
         let f = &flipped[singles + 4 * k..singles + 4 * k + 4];
         flips += (f[0] as usize + f[1] as usize).max(f[2] as usize + f[3] as usize);
     }
+    flips
+}
+
+/// [`chart_metrics`] with the chart's quad faces (whose own two triangles are among
+/// `triangles`): a quad counts as folded on the split with more flipped triangles, so a
+/// "no flips" quad is strictly convex in UV whichever diagonal a renderer or exporter picks.
+/// Flips follow the one definition ([`flipped_triangles`]) over the chart's other triangles
+/// and both splits of every quad; distortion is measured on `triangles`.
+pub fn chart_metrics_with_quads(
+    positions: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    quads: &[Quad],
+    uv: &[[f64; 2]],
+    boundary_loops: &[Vec<u32>],
+) -> ChartMetrics {
+    let mut m = chart_metrics(positions, triangles, uv, boundary_loops);
+    if quads.is_empty() || !(m.area_3d > 0.0) {
+        return m;
+    }
+    let flips = count_flips_with_quads(triangles, quads, uv);
     m.flips = flips;
     m
 }
