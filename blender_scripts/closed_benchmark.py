@@ -79,7 +79,7 @@ def _clear(obj, mesh_io):
 def _run_uvflat(obj, method):
     common.edit_mode([obj])
     t0 = time.perf_counter()
-    bpy.ops.uv.uvflat_unwrap(method=method, pack=True, margin=0.001)
+    bpy.ops.uv.uvflat_unwrap(method=method, pack="ALL", margin=0.001)
     seconds = time.perf_counter() - t0
     common.object_mode()
     return seconds
