@@ -190,13 +190,15 @@ impl Chart {
     }
 }
 
-struct UnionFind(Vec<u32>);
+/// Disjoint sets over `0..n` with path halving; the smaller root wins a union, so roots (and
+/// everything built on them) do not depend on the order of unions.
+pub(crate) struct UnionFind(Vec<u32>);
 
 impl UnionFind {
-    fn new(n: usize) -> Self {
+    pub(crate) fn new(n: usize) -> Self {
         UnionFind((0..n as u32).collect())
     }
-    fn find(&mut self, mut x: u32) -> u32 {
+    pub(crate) fn find(&mut self, mut x: u32) -> u32 {
         while self.0[x as usize] != x {
             let p = self.0[x as usize];
             self.0[x as usize] = self.0[p as usize];
@@ -204,13 +206,15 @@ impl UnionFind {
         }
         x
     }
-    fn union(&mut self, a: u32, b: u32) {
+    /// Join the sets of `a` and `b`; whether they were apart.
+    pub(crate) fn union(&mut self, a: u32, b: u32) -> bool {
         let (ra, rb) = (self.find(a), self.find(b));
-        if ra != rb {
-            // Smaller index wins: keeps roots deterministic.
-            let (lo, hi) = if ra < rb { (ra, rb) } else { (rb, ra) };
-            self.0[hi as usize] = lo;
+        if ra == rb {
+            return false;
         }
+        let (lo, hi) = if ra < rb { (ra, rb) } else { (rb, ra) };
+        self.0[hi as usize] = lo;
+        true
     }
 }
 

@@ -19,31 +19,7 @@
 //! must be avoided). Ties break by edge id, so the result is deterministic.
 
 use super::graph::{multi_source_dijkstra, other, ChartGraph};
-
-struct UnionFind(Vec<u32>);
-
-impl UnionFind {
-    fn new(n: usize) -> Self {
-        UnionFind((0..n as u32).collect())
-    }
-    fn find(&mut self, mut x: u32) -> u32 {
-        while self.0[x as usize] != x {
-            let p = self.0[x as usize];
-            self.0[x as usize] = self.0[p as usize];
-            x = p;
-        }
-        x
-    }
-    fn union(&mut self, a: u32, b: u32) -> bool {
-        let (ra, rb) = (self.find(a), self.find(b));
-        if ra == rb {
-            return false;
-        }
-        let (lo, hi) = if ra < rb { (ra, rb) } else { (rb, ra) };
-        self.0[hi as usize] = lo;
-        true
-    }
-}
+use crate::charts::UnionFind;
 
 /// Edges (ids) of 2g loops that cut every handle of a chart of genus `genus`, or none.
 pub fn handle_loops(graph: &ChartGraph, cost: &[f64], root: u32, boundary_loops: &[Vec<u32>]) -> Vec<bool> {
