@@ -158,7 +158,17 @@ KEYMAP_ITEMS = (
 )
 _addon_keymaps: list = []
 
-classes = (UVFLAT_PG_defaults, UVFLAT_PT_defaults, UVFLAT_PT_result)
+class UVFLAT_PT_result_3d(UVFLAT_PT_result):
+    """The same panel in the 3D Viewport's sidebar, where the heat map shows."""
+
+    bl_space_type = "VIEW_3D"
+
+    @classmethod
+    def poll(cls, context):
+        return context.mode == "EDIT_MESH"
+
+
+classes = (UVFLAT_PG_defaults, UVFLAT_PT_defaults, UVFLAT_PT_result, UVFLAT_PT_result_3d)
 
 
 def register_menus():

@@ -1251,6 +1251,9 @@ def test_result_panel_lists_the_last_unwraps_charts(ext, scene):
     assert {"Chart", "Method", "Faces", "Flips", "Overlap", "Conformal", "Area", "Time"} <= set(layout.labels)
     first = ext.engine.chart_rows(summary)[0]
     assert f"{obj.name}:{first['chart']}" in layout.labels
+    # the same panel in the 3D Viewport, where the heat map shows
+    assert "UVFLAT_PT_result_3d" in dir(bpy.types)
+    assert ext.ui.UVFLAT_PT_result_3d.bl_space_type == "VIEW_3D"
 
 
 def test_addon_options_follow_the_core_contract(ext):
