@@ -23,26 +23,6 @@ fn median(mut t: Vec<f64>) -> f64 {
     t[t.len() / 2]
 }
 
-/// Split every triangle into four at its edge midpoints (triangle meshes only).
-fn subdivide(s: &common::Soup) -> common::Soup {
-    let mut positions = s.positions.clone();
-    let mut mid = std::collections::HashMap::new();
-    let mut corner_verts = Vec::with_capacity(4 * s.corner_verts.len());
-    for t in s.corner_verts.chunks_exact(3) {
-        let mut m = [0u32; 3];
-        for k in 0..3 {
-            let (a, b) = (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3]));
-            m[k] = *mid.entry((a, b)).or_insert_with(|| {
-                let (p, q) = (positions[a as usize], positions[b as usize]);
-                positions.push([(p[0] + q[0]) / 2.0, (p[1] + q[1]) / 2.0, (p[2] + q[2]) / 2.0]);
-                (positions.len() - 1) as u32
-            });
-        }
-        corner_verts.extend_from_slice(&[t[0], m[0], m[2], m[0], t[1], m[1], m[2], m[1], t[2], m[0], m[1], m[2]]);
-    }
-    let face_sizes = vec![3; corner_verts.len() / 3];
-    common::Soup { positions, corner_verts, face_sizes }
-}
 
 /// Lower triangle (with diagonal) of `L + I` for the graph of `triangles`, each vertex
 /// expanded to a `block × block` dense block.
@@ -87,7 +67,7 @@ fn main() {
     println!("|---:|---|---:|---|---:|---|---:|---:|---:|---:|");
     for level in 0..=max_levels {
         if level > 0 {
-            s = subdivide(&s);
+            s = common::subdivide(&s);
         }
         let mesh = PolyMesh::new(&s.positions, &s.corner_verts, &s.face_sizes).unwrap();
         let charts = build_charts(&mesh, &[], None);

@@ -498,8 +498,10 @@ fn auto_cut(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], depth
     let max_stretch = cuts::area_bound(ctx.options.auto_seams.max_stretch);
     let mut seed: Vec<u32> = Vec::new();
     let mut last: Vec<Piece> = Vec::new();
+    // Graph, costs and the scale system's analysis once; each round refactors numerically.
+    let cutter = cuts::ChartCutter::new(ctx.mesh, chart, &ctx.options.auto_seams, ctx.avoid);
     for round in 0..=cuts::REPAIR_ROUNDS {
-        let cut = cuts::cut_chart(ctx.mesh, chart, &ctx.options.auto_seams, ctx.avoid, &seed, round);
+        let cut = cutter.cut(&seed, round);
         let mut all: Vec<[u32; 2]> = base_seams.to_vec();
         all.extend_from_slice(&cut.seams);
         let sub = build_charts_with(ctx.mesh, &all, Some(&mask), ctx.render);
@@ -534,8 +536,7 @@ fn auto_cut(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], depth
     }
     let valid = last.iter().all(|p| piece_valid(&p.report, max_stretch));
     if !valid && depth < cuts::MAX_SPLIT_DEPTH && chart.faces.len() >= 2 {
-        let graph = cuts::ChartGraph::new(ctx.mesh, chart);
-        let split = cuts::split::halve(&graph, chart, ctx.avoid);
+        let split = cuts::split::halve(cutter.graph(), chart, ctx.avoid);
         if !split.is_empty() {
             let mut all: Vec<[u32; 2]> = base_seams.to_vec();
             all.extend_from_slice(&split);

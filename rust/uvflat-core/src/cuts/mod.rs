@@ -149,7 +149,7 @@ pub fn edge_costs(graph: &ChartGraph, chart: &Chart, options: &AutoSeamOptions, 
         .collect()
 }
 
-/// Choose cones and cut edges that open `chart` into a disk.
+/// Choose cones and cut edges that open `chart` into a disk (one shot; see [`ChartCutter`]).
 ///
 /// * `avoid`: per mesh vertex, whether seams must stay away from it.
 /// * `seed_cones`: chart vertices that must be cones (added by repair rounds).
@@ -165,65 +165,94 @@ pub fn cut_chart(
     seed_cones: &[u32],
     extra_cones: usize,
 ) -> ChartCuts {
-    let graph = ChartGraph::new(mesh, chart);
-    let cost = edge_costs(&graph, chart, options, avoid);
-    let boundary = chart.boundary_mask();
-    let allowed: Vec<bool> =
-        (0..chart.positions.len()).map(|v| !boundary[v] && !avoid[chart.mesh_vertex[v] as usize]).collect();
-    let min_cones = if chart.boundary_loops.is_empty() {
-        if chart.genus == 0 {
-            2
+    ChartCutter::new(mesh, chart, options, avoid).cut(seed_cones, extra_cones)
+}
+
+/// The cutting state of one chart, built once and reused by every repair round: its edge
+/// graph and cut costs, and its scale-factor system with the symbolic analysis done (each
+/// round is then numeric refactors only).
+pub struct ChartCutter<'a> {
+    chart: &'a Chart,
+    options: &'a AutoSeamOptions,
+    graph: ChartGraph,
+    cost: Vec<f64>,
+    allowed: Vec<bool>,
+    boundary: Vec<bool>,
+    min_cones: usize,
+    solver: Option<cones::ScaleSolver>,
+}
+
+impl<'a> ChartCutter<'a> {
+    /// Analyse `chart` (preconditions of [`cut_chart`]).
+    pub fn new(mesh: &PolyMesh<'_>, chart: &'a Chart, options: &'a AutoSeamOptions, avoid: &[bool]) -> Self {
+        let graph = ChartGraph::new(mesh, chart);
+        let cost = edge_costs(&graph, chart, options, avoid);
+        let boundary = chart.boundary_mask();
+        let allowed: Vec<bool> =
+            (0..chart.positions.len()).map(|v| !boundary[v] && !avoid[chart.mesh_vertex[v] as usize]).collect();
+        let min_cones = match (chart.boundary_loops.is_empty(), chart.genus) {
+            (true, 0) => 2,
+            (true, _) => 1,
+            (false, _) => 0,
+        };
+        ChartCutter { chart, options, graph, cost, allowed, boundary, min_cones, solver: cones::ScaleSolver::new(chart) }
+    }
+
+    /// The edge graph of the chart.
+    pub fn graph(&self) -> &ChartGraph {
+        &self.graph
+    }
+
+    /// Cones and cut for this round (arguments as in [`cut_chart`]).
+    pub fn cut(&self, seed_cones: &[u32], extra_cones: usize) -> ChartCuts {
+        let (chart, options, graph, cost, boundary, min_cones) =
+            (self.chart, self.options, &self.graph, &self.cost, &self.boundary, self.min_cones);
+        let cones = match &self.solver {
+            Some(solver) => cones::place_cones(
+                solver,
+                &self.allowed,
+                min_cones,
+                options.max_cones + extra_cones,
+                options.max_stretch.ln(),
+                seed_cones,
+            ),
+            None => cones::Cones { vertices: seed_cones.to_vec(), curvature: vec![0.0; seed_cones.len()], u: vec![], max_u: f64::INFINITY },
+        };
+        let mut cone_vertices = cones.vertices.clone();
+        if cone_vertices.len() < min_cones {
+            // Every vertex is avoided or the system failed: pick far-apart vertices anyway.
+            for v in 0..chart.positions.len() as u32 {
+                if cone_vertices.len() >= min_cones {
+                    break;
+                }
+                if !boundary[v as usize] && !cone_vertices.contains(&v) {
+                    cone_vertices.push(v);
+                }
+            }
+        }
+        let loops = if chart.genus > 0 {
+            let root = cone_vertices.first().copied().or_else(|| chart.boundary_loops.first().map(|l| l[0])).unwrap_or(0);
+            cut_graph::handle_loops(graph, cost, root, &chart.boundary_loops)
         } else {
-            1
-        }
-    } else {
-        0
-    };
-    let cones = match cones::ScaleSolver::new(chart) {
-        Some(solver) => cones::place_cones(
-            &solver,
-            &allowed,
-            min_cones,
-            options.max_cones + extra_cones,
-            options.max_stretch.ln(),
-            seed_cones,
-        ),
-        None => cones::Cones { vertices: seed_cones.to_vec(), curvature: vec![0.0; seed_cones.len()], u: vec![], max_u: f64::INFINITY },
-    };
-    let mut cone_vertices = cones.vertices.clone();
-    if cone_vertices.len() < min_cones {
-        // Every vertex is avoided or the system failed: pick far-apart vertices anyway.
-        for v in 0..chart.positions.len() as u32 {
-            if cone_vertices.len() >= min_cones {
-                break;
-            }
-            if !boundary[v as usize] && !cone_vertices.contains(&v) {
-                cone_vertices.push(v);
+            vec![false; graph.edges.len()]
+        };
+        let cut = cut_graph::join_and_prune(graph, cost, loops, &cone_vertices, &chart.boundary_loops);
+        let mut out = ChartCuts {
+            cones: cone_vertices.clone(),
+            cone_curvature: cones.curvature.clone(),
+            max_log_scale: cones.max_u,
+            ..Default::default()
+        };
+        out.cone_curvature.resize(cone_vertices.len(), 0.0);
+        for (e, &c) in cut.iter().enumerate() {
+            if c {
+                let [a, b] = graph.edges[e];
+                out.edges.push([a, b]);
+                let (ma, mb) = (chart.mesh_vertex[a as usize], chart.mesh_vertex[b as usize]);
+                out.seams.push([ma.min(mb), ma.max(mb)]);
+                out.length += graph.length[e];
             }
         }
+        out
     }
-    let loops = if chart.genus > 0 {
-        let root = cone_vertices.first().copied().or_else(|| chart.boundary_loops.first().map(|l| l[0])).unwrap_or(0);
-        cut_graph::handle_loops(&graph, &cost, root, &chart.boundary_loops)
-    } else {
-        vec![false; graph.edges.len()]
-    };
-    let cut = cut_graph::join_and_prune(&graph, &cost, loops, &cone_vertices, &chart.boundary_loops);
-    let mut out = ChartCuts {
-        cones: cone_vertices.clone(),
-        cone_curvature: cones.curvature.clone(),
-        max_log_scale: cones.max_u,
-        ..Default::default()
-    };
-    out.cone_curvature.resize(cone_vertices.len(), 0.0);
-    for (e, &c) in cut.iter().enumerate() {
-        if c {
-            let [a, b] = graph.edges[e];
-            out.edges.push([a, b]);
-            let (ma, mb) = (chart.mesh_vertex[a as usize], chart.mesh_vertex[b as usize]);
-            out.seams.push([ma.min(mb), ma.max(mb)]);
-            out.length += graph.length[e];
-        }
-    }
-    out
 }

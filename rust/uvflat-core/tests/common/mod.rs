@@ -153,3 +153,25 @@ pub fn cut_cylinder(nu: usize, nv: usize, h: f64) -> (Soup, Vec<[u32; 2]>) {
     let seams = (0..nv).map(|j| [id(0, j), id(0, j + 1)]).collect();
     (Soup { positions, corner_verts, face_sizes }, seams)
 }
+
+/// Split every triangle into four at its edge midpoints (triangle meshes only).
+pub fn subdivide(s: &Soup) -> Soup {
+    assert!(s.face_sizes.iter().all(|&k| k == 3), "subdivision needs a triangle mesh");
+    let mut positions = s.positions.clone();
+    let mut mid = std::collections::HashMap::new();
+    let mut corner_verts = Vec::with_capacity(4 * s.corner_verts.len());
+    for t in s.corner_verts.chunks_exact(3) {
+        let mut m = [0u32; 3];
+        for k in 0..3 {
+            let (a, b) = (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3]));
+            m[k] = *mid.entry((a, b)).or_insert_with(|| {
+                let (p, q) = (positions[a as usize], positions[b as usize]);
+                positions.push([(p[0] + q[0]) / 2.0, (p[1] + q[1]) / 2.0, (p[2] + q[2]) / 2.0]);
+                (positions.len() - 1) as u32
+            });
+        }
+        corner_verts.extend_from_slice(&[t[0], m[0], m[2], m[0], t[1], m[1], m[2], m[1], t[2], m[0], m[1], m[2]]);
+    }
+    let face_sizes = vec![3; corner_verts.len() / 3];
+    Soup { positions, corner_verts, face_sizes }
+}
