@@ -212,3 +212,21 @@ def test_absent_flag_attributes_read_as_false(ext, scene):
     assert len(io.read_seams(mesh)) == 1
     assert io.read_hidden_faces(mesh).tolist() == [False, True]
     bpy.data.meshes.remove(mesh)
+
+
+def test_heat_map_colours_display_the_heat_colours(ext, scene):
+    """The colour attributes are float colours (one bulk copy to write) holding the heat
+    colours of the per-face distortion: read back as sRGB they are the heat colours."""
+    obj = _disk("DiskHeat")
+    result, summary = unwrap(ext, [obj], method="lscm", pack="ALL")
+    assert result == {"FINISHED"}
+    io, dist = ext.mesh_io, ext.distortion
+    _, _, face_sizes = io.read_topology(obj.data)
+    starts = np.concatenate([[0], np.cumsum(face_sizes)[:-1]])
+    for kind, name in ((dist.CONFORMAL, "conformal"), (dist.AREA, "area")):
+        attr = obj.data.attributes[dist.COLOR[name]]
+        assert attr.data_type == "FLOAT_COLOR" and attr.domain == "CORNER"
+        expected = dist.heat_colors(io.read_attribute(obj.data, kind))
+        for face in (0, len(face_sizes) // 2, len(face_sizes) - 1):
+            shown = np.array(attr.data[int(starts[face])].color_srgb)
+            np.testing.assert_allclose(shown, expected[face], atol=2e-3)
