@@ -87,6 +87,28 @@ def srgb_to_linear(rgba):
     return out
 
 
+_LEVELS = 1024  # steps of the heat scale in the stored colours (bytes held 256)
+_LINEAR_TABLE = None
+
+
+def _linear_heat_colors(values):
+    """:func:`heat_colors` as linear float32 RGBA, from a table of :data:`_LEVELS` steps of
+    the scale (the sRGB conversion's power is too slow per face on large meshes)."""
+    global _LINEAR_TABLE
+    if _LINEAR_TABLE is None:
+        t = np.linspace(0.0, 1.0, _LEVELS)
+        table = srgb_to_linear(heat_colors(np.exp(t * np.log(RED_AT))))
+        grey = srgb_to_linear(heat_colors([np.nan]))
+        _LINEAR_TABLE = np.vstack([table, grey]).astype(np.float32)
+    values = np.asarray(values, dtype=np.float64)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        t = np.clip(np.log(np.maximum(values, 1.0)) / np.log(RED_AT), 0.0, 1.0)
+    index = np.rint(np.nan_to_num(t, nan=0.0) * (_LEVELS - 1)).astype(np.int64)
+    index[np.isposinf(values)] = _LEVELS - 1
+    index[np.isnan(values)] = _LEVELS  # grey
+    return _LINEAR_TABLE[index]
+
+
 def write(mesh, face_sizes, solved, conformal, area, flipped):
     """Store the measures of the ``solved`` faces (others keep theirs, see the module doc)."""
     n_f = len(face_sizes)
@@ -100,8 +122,7 @@ def write(mesh, face_sizes, solved, conformal, area, flipped):
     mesh_io.write_attribute(mesh, AREA, "FACE", "FLOAT", a)
     mesh_io.write_attribute(mesh, FLIPPED, "FACE", "BOOLEAN", f)
     for kind, values in (("conformal", c), ("area", a)):
-        rgba = np.repeat(srgb_to_linear(heat_colors(values)).astype(np.float32), face_sizes,
-                         axis=0)
+        rgba = np.repeat(_linear_heat_colors(values), face_sizes, axis=0)
         mesh_io.write_attribute(mesh, COLOR[kind], "CORNER", "FLOAT_COLOR", rgba)
 
 

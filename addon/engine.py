@@ -308,7 +308,7 @@ def _write(job: _Job, core, phases=None):
     new_uv = job.old_uv.copy()
     solved = np.asarray(job.result.face_solved, dtype=bool) & job.selected
     corners = np.repeat(solved, job.face_sizes)
-    new_uv[corners] = np.asarray(job.result.uv)[corners]
+    np.copyto(new_uv, np.asarray(job.result.uv), where=corners[:, None])
     # per-face quality, measured independently of the solver in texture pixels (before the
     # aspect correction; packing moves islands by similarities only, which changes none of it)
     t0 = time.perf_counter()

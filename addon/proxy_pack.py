@@ -97,6 +97,16 @@ def _hull(points):
     return hull
 
 
+def _grouped(corners, corner_chart, ids):
+    """``corners`` ordered by island (``ids``: the sorted chart ids) and where each island's
+    run starts; a counting sort (island numbers fit 16 bits, :data:`MAX_ISLANDS`)."""
+    if len(ids) == 1:
+        return corners, np.zeros(1, dtype=np.int64)
+    island = np.searchsorted(ids, corner_chart[corners]).astype(np.int16)
+    order = np.argsort(island, kind="stable")
+    return corners[order], np.searchsorted(island[order], np.arange(len(ids)))
+
+
 def islands(jobs_faces, uvs):
     """The islands of ``jobs_faces`` (pairs ``(job, packed faces mask)``) with their hulls,
     from the UVs in ``uvs`` (job id -> (C,2) float32 as written); ``None`` if any island is
@@ -115,16 +125,8 @@ def islands(jobs_faces, uvs):
         seams = np.asarray(getattr(job.result, "new_seams", ()), dtype=np.int64).reshape(-1, 2)
         edge = _boundary_corners(job.obj.data, face_sizes, corner_in, seams)
         uv = uvs[id(job)].astype(np.float64)
-        members = np.flatnonzero(corner_in)
-        member_chart = corner_chart[members]
-        order = np.argsort(member_chart, kind="stable")
-        members, member_chart = members[order], member_chart[order]
-        cut = np.searchsorted(member_chart, ids)
-        on_edge = np.flatnonzero(edge)
-        edge_chart = corner_chart[on_edge]
-        order = np.argsort(edge_chart, kind="stable")
-        on_edge, edge_chart = on_edge[order], edge_chart[order]
-        edge_cut = np.searchsorted(edge_chart, ids)
+        members, cut = _grouped(np.flatnonzero(corner_in), corner_chart, ids)
+        on_edge, edge_cut = _grouped(np.flatnonzero(edge), corner_chart, ids)
         for k in range(len(ids)):
             end = cut[k + 1] if k + 1 < len(ids) else len(members)
             edge_end = edge_cut[k + 1] if k + 1 < len(ids) else len(on_edge)
@@ -197,10 +199,22 @@ def pack(context, islands_, settings, enter_edit_mode, leave_edit_mode):
 
 
 def apply(islands_, transforms, uvs):
-    """Move every island's corners in ``uvs`` (job id -> (C,2) float32, changed in place)."""
+    """Move every island's corners in ``uvs`` (job id -> (C,2) float32, changed in place),
+    all islands of a mesh in one vectorised step (in float64)."""
+    per_job = {}
     for isl, (a, b) in zip(islands_, transforms):
-        uv = uvs[id(isl.job)]
-        z = uv[isl.corners, 0].astype(np.float64) + 1j * uv[isl.corners, 1].astype(np.float64)
-        z = a * z + b
-        uv[isl.corners, 0] = z.real
-        uv[isl.corners, 1] = z.imag
+        per_job.setdefault(id(isl.job), []).append((isl.corners, a, b))
+    for key, parts in per_job.items():
+        uv = uvs[key]
+        if len(parts) == 1 and len(parts[0][0]) == len(uv):
+            corners = slice(None)
+            a, b = parts[0][1], parts[0][2]
+        else:
+            corners = np.concatenate([p[0] for p in parts])
+            counts = [len(p[0]) for p in parts]
+            a = np.repeat(np.array([p[1] for p in parts]), counts)
+            b = np.repeat(np.array([p[2] for p in parts]), counts)
+        u = uv[corners, 0].astype(np.float64)
+        v = uv[corners, 1].astype(np.float64)
+        uv[corners, 0] = a.real * u - a.imag * v + b.real
+        uv[corners, 1] = a.imag * u + a.real * v + b.imag
