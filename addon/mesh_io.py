@@ -320,8 +320,20 @@ def restore_attribute(mesh, name, saved):
 
 
 def write_seams(mesh, use_seam):
-    """Set every edge's seam flag from an ``(E,)`` bool mask."""
-    mesh.edges.foreach_set("use_seam", np.ascontiguousarray(use_seam, dtype=bool))
+    """Set every edge's seam flag from an ``(E,)`` bool mask: one copy into the seam
+    attribute when the mesh has one (its name depends on Blender's version), else through
+    ``edges.use_seam``, which creates it."""
+    use_seam = np.ascontiguousarray(use_seam, dtype=bool)
+    for name in ("uv_seam", ".uv_seam"):
+        attr = mesh.attributes.get(name)
+        if attr is not None and attr.data_type == "BOOLEAN" and attr.domain == "EDGE":
+            if len(attr.data) != len(use_seam):
+                raise ValueError(f"mesh '{mesh.name}': {len(use_seam)} seam flags for "
+                                 f"{len(attr.data)} edges")
+            attr.data.foreach_set("value", use_seam)
+            break
+    else:
+        mesh.edges.foreach_set("use_seam", use_seam)
     mesh.update()
 
 

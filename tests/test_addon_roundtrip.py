@@ -230,3 +230,21 @@ def test_heat_map_colours_display_the_heat_colours(ext, scene):
         for face in (0, len(face_sizes) // 2, len(face_sizes) - 1):
             shown = np.array(attr.data[int(starts[face])].color_srgb)
             np.testing.assert_allclose(shown, expected[face], atol=2e-3)
+
+
+def test_write_seams_with_and_without_a_seam_attribute(ext, scene):
+    """Seams written into a mesh without any (Blender creates the attribute) and into one
+    with them (one copy into the attribute) read back exactly."""
+    io = ext.mesh_io
+    obj = _disk("DiskSeams")
+    mesh = obj.data
+    n_e = len(mesh.edges)
+    rng = np.random.default_rng(7)
+    for _ in range(2):
+        flags = rng.random(n_e) < 0.3
+        io.write_seams(mesh, flags)
+        np.testing.assert_array_equal(io.read_edges(mesh)[1], flags)
+        np.testing.assert_array_equal(
+            np.array([e.use_seam for e in mesh.edges]), flags)
+    with pytest.raises(ValueError):
+        io.write_seams(mesh, np.zeros(n_e + 1, dtype=bool))
