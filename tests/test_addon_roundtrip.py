@@ -11,7 +11,12 @@ import time
 import numpy as np
 import pytest
 
+from types import SimpleNamespace
+
 from test_addon import (  # noqa: F401  (fixtures are used by name)
+    _ContextStandIn,
+    _drive_modal,
+    _operator_stand_in,
     bpy,
     common,
     ext,
@@ -248,3 +253,31 @@ def test_write_seams_with_and_without_a_seam_attribute(ext, scene):
             np.array([e.use_seam for e in mesh.edges]), flags)
     with pytest.raises(ValueError):
         io.write_seams(mesh, np.zeros(n_e + 1, dtype=bool))
+
+
+def test_modal_unwrap_packs_on_the_stand_in_like_the_direct_one(ext, scene, monkeypatch):
+    """The modal unwrap (meshes out of edit mode while the core solves) packs on the
+    stand-in and gives the direct unwrap's UVs, back in edit mode."""
+    monkeypatch.setattr(ext.engine, "MODAL_AFTER_SECONDS", 0.0)
+    monkeypatch.setattr(ext.proxy_pack, "MIN_FACES", 0)
+    calls = []
+    real_pack = ext.proxy_pack.pack
+    monkeypatch.setattr(ext.proxy_pack, "pack",
+                        lambda *a, **k: calls.append(1) or real_pack(*a, **k))
+    obj = _disk("DiskModal")
+    _reset_uvs(ext, obj)
+    common.edit_mode([obj])
+    ctx = _ContextStandIn()
+    op = _operator_stand_in(ext, method="lscm", pack="ALL")
+    try:
+        assert op.invoke(ctx, SimpleNamespace(type="LEFTMOUSE", value="PRESS")) == {"RUNNING_MODAL"}
+        assert _drive_modal(op, ctx) == {"FINISHED"}
+        assert obj.mode == "EDIT"
+    finally:
+        common.object_mode()
+    modal_uv = read(ext, obj).uv
+    assert calls == [1]
+    _reset_uvs(ext, obj)
+    result, _ = unwrap(ext, [obj], method="lscm", pack="ALL")
+    assert result == {"FINISHED"} and calls == [1, 1]
+    np.testing.assert_array_equal(read(ext, obj).uv, modal_uv)
