@@ -309,8 +309,8 @@ def _write(job: _Job, core, phases=None):
     solved = np.asarray(job.result.face_solved, dtype=bool) & job.selected
     corners = np.repeat(solved, job.face_sizes)
     np.copyto(new_uv, np.asarray(job.result.uv), where=corners[:, None])
-    # per-face quality, measured independently of the solver in texture pixels (before the
-    # aspect correction; packing moves islands by similarities only, which changes none of it)
+    # per-face quality of the returned UVs (before the aspect correction; packing moves
+    # islands by similarities only, which changes none of it)
     t0 = time.perf_counter()
     quality = distortion.measure(core, job, new_uv, solved)
     if phases is not None:

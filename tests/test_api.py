@@ -1253,3 +1253,28 @@ def test_fit_to_ignores_unselected_corners_and_never_collapses_a_mirrored_chart(
     assert "area-scaled" in c.reason
     width = np.ptp(r.uv[:, 0])
     assert abs(width - 3.0) < 1e-9, width
+
+
+@pytest.mark.parametrize("method", ["lscm", "abf", "slim", "tutte"])
+def test_result_carries_the_per_face_distortion_of_its_uvs(method):
+    # A bumpy quad grid (non-planar, so distortion varies per face), a seam splitting it in
+    # two charts, and a few faces left unselected.
+    pos, cv, fs = grid(8, 6)
+    pos = np.asarray(pos, dtype=float).copy()
+    pos[:, 2] = 0.3 * np.sin(3.0 * pos[:, 0]) * np.cos(2.0 * pos[:, 1])
+    seams = np.array([[4 + 9 * j, 4 + 9 * (j + 1)] for j in range(6)])
+    selected = np.ones(len(fs), dtype=bool)
+    selected[[0, 1, 10]] = False
+    r = uvflat.unwrap(pos, cv, fs, method=method, seams=seams, selected=selected)
+    solved = np.asarray(r.face_solved)
+    assert solved.sum() == selected.sum() and len(r.charts) == 2
+    m = uvflat.metrics(pos, cv, fs, r.uv, selected=solved)
+    for got, want in [(r.face_conformal, m.face_conformal), (r.face_area, m.face_area)]:
+        got, want = np.asarray(got), np.asarray(want)
+        assert got.shape == (len(fs),)
+        assert np.all(np.isnan(got[~solved]))
+        assert np.all(np.isfinite(got[solved])) and np.all(got[solved] >= 1.0)
+        np.testing.assert_allclose(got[solved], want[solved], rtol=1e-9)
+    assert np.ptp(np.asarray(r.face_area)[solved]) > 1e-3  # the measure is not constant
+    d = r.as_dict()
+    np.testing.assert_array_equal(d["face_conformal"], r.face_conformal)

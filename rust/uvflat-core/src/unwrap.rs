@@ -195,6 +195,11 @@ pub struct Unwrapped {
     /// Edges of the selection used by three or more selected faces; each was treated as a
     /// seam (a mesh with many of them is shredded into many small charts).
     pub non_manifold_edges: usize,
+    /// `[conformal, area]` distortion of every face that received UVs, as
+    /// [`crate::metrics::MeshMetrics::per_face`] defines it (3D-area-weighted over the face's
+    /// triangles, the chart's UVs area-normalised); NaN elsewhere. Measured on the returned
+    /// UVs, so a caller needs no second pass to colour faces by quality.
+    pub face_distortion: Vec<[f64; 2]>,
 }
 
 impl Unwrapped {
@@ -261,7 +266,29 @@ pub fn unwrap(input: &MeshInput<'_>, options: &UnwrapOptions) -> Result<Unwrappe
     if let Some(p) = options.progress.as_ref().filter(|p| p.is_cancelled()) {
         return Err(UvError::Cancelled { charts_done: p.charts_done(), charts_total: total });
     }
-    let pieces = pieces.into_iter().map(|p| p.unwrap_or_default());
+    let pieces: Vec<Vec<Piece>> = pieces.into_iter().map(|p| p.unwrap_or_default()).collect();
+    // Per-face quality of every mapped piece, in parallel.
+    let distortion: Vec<Vec<Vec<(u32, [f64; 2])>>> = {
+        use rayon::prelude::*;
+        charts
+            .par_iter()
+            .zip(pieces.par_iter())
+            .map(|(original, list)| {
+                list.iter()
+                    .map(|piece| match &piece.uv {
+                        Some(vuv) if piece.report.status != ChartStatus::Failed => {
+                            metrics::face_distortion(piece.chart.as_ref().unwrap_or(original), vuv)
+                        }
+                        _ => Vec::new(),
+                    })
+                    .collect()
+            })
+            .collect()
+    };
+    let mut face_distortion = vec![[f64::NAN; 2]; mesh.n_faces()];
+    for (f, d) in distortion.into_iter().flatten().flatten() {
+        face_distortion[f as usize] = d;
+    }
 
     let mut uv = vec![[0.0, 0.0]; n_corners];
     let mut face_chart = vec![-1i32; mesh.n_faces()];
@@ -286,7 +313,7 @@ pub fn unwrap(input: &MeshInput<'_>, options: &UnwrapOptions) -> Result<Unwrappe
     }
     new_seams.sort_unstable();
     new_seams.dedup();
-    Ok(Unwrapped { uv, face_chart, charts: reports, new_seams, non_manifold_edges })
+    Ok(Unwrapped { uv, face_chart, charts: reports, new_seams, non_manifold_edges, face_distortion })
 }
 
 fn solve_chart(

@@ -434,6 +434,8 @@ fn unwrap(
         method: method_name,
         new_seams: new_seams.unbind(),
         non_manifold_edges: result.non_manifold_edges,
+        face_conformal: PyArray1::from_iter(py, result.face_distortion.iter().map(|d| d[0])).unbind(),
+        face_area: PyArray1::from_iter(py, result.face_distortion.iter().map(|d| d[1])).unbind(),
     })
 }
 

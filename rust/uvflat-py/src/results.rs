@@ -156,6 +156,8 @@ pub struct PyUnwrapResult {
     pub method: String,
     pub new_seams: Py<PyArray2<u32>>,
     pub non_manifold_edges: usize,
+    pub face_conformal: Py<PyArray1<f64>>,
+    pub face_area: Py<PyArray1<f64>>,
 }
 
 impl PyUnwrapResult {
@@ -215,10 +217,27 @@ impl PyUnwrapResult {
         self.non_manifold_edges
     }
 
+    /// Conformal distortion (σ1/σ2, 1 is perfect) of every face that received UVs, shape (F,),
+    /// float64, NaN elsewhere: the same per-face measure as ``uvflat.metrics(...).face_conformal``,
+    /// on the returned UVs and the triangulation the unwrap used.
+    #[getter]
+    fn face_conformal<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.face_conformal.bind(py).clone()
+    }
+
+    /// Area distortion (max(J, 1/J) of the area-normalised map) of every face that received
+    /// UVs, shape (F,), float64, NaN elsewhere (as ``face_conformal``).
+    #[getter]
+    fn face_area<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.face_area.bind(py).clone()
+    }
+
     /// All fields as a plain dict (arrays included, reports as dicts).
     fn as_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);
         d.set_item("method", &self.method)?;
+        d.set_item("face_conformal", self.face_conformal.bind(py))?;
+        d.set_item("face_area", self.face_area.bind(py))?;
         d.set_item("uv", self.uv.bind(py))?;
         d.set_item("chart", self.chart.bind(py))?;
         d.set_item("face_solved", self.face_solved.bind(py))?;

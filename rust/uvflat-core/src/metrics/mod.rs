@@ -706,7 +706,7 @@ pub fn measure_with_triangles(
 
 /// `(face, [conformal, area])` of every face of `chart`: 3D-area-weighted mean of its
 /// triangles' [`triangle_distortion`]; NaN for a face without 3D area.
-fn face_distortion(chart: &crate::charts::Chart, uv: &[[f64; 2]]) -> Vec<(u32, [f64; 2])> {
+pub(crate) fn face_distortion(chart: &crate::charts::Chart, uv: &[[f64; 2]]) -> Vec<(u32, [f64; 2])> {
     let per_tri = triangle_distortion(&chart.positions, &chart.triangles, uv);
     let mut acc: std::collections::HashMap<u32, ([f64; 2], f64)> = std::collections::HashMap::new();
     for ((t, &f), d) in chart.triangles.iter().zip(&chart.triangle_face).zip(&per_tri) {

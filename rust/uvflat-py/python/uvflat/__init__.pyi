@@ -164,6 +164,13 @@ class UnwrapResult:
     def non_manifold_edges(self) -> int:
         """Edges of the selection used by three or more selected faces; each was treated as a
         seam (many of them shred a mesh into many small charts)."""
+    @property
+    def face_conformal(self) -> npt.NDArray[np.float64]:
+        """Conformal distortion of every face that received UVs, shape (F,), NaN elsewhere
+        (the per-face measure of :func:`metrics`, on the returned UVs)."""
+    @property
+    def face_area(self) -> npt.NDArray[np.float64]:
+        """Area distortion of every face that received UVs, shape (F,), NaN elsewhere."""
     def as_dict(self) -> dict[str, Any]:
         """All fields as a plain dict (arrays included, chart reports as dicts)."""
 
