@@ -115,11 +115,16 @@ impl Chart {
         (tris, w)
     }
 
-    /// Average pinned UV per chart vertex that has a pinned corner.
-    pub fn vertex_pins(&self, pin_of_corner: &[Option<[f64; 2]>]) -> Vec<(u32, [f64; 2])> {
+    /// Average pinned UV per chart vertex that has a pinned corner. `pins` maps input corners
+    /// to their pinned UV (only the pinned corners are in it, so an unwrap without pins costs
+    /// nothing per corner).
+    pub fn vertex_pins(&self, pins: &HashMap<u32, [f64; 2]>) -> Vec<(u32, [f64; 2])> {
+        if pins.is_empty() {
+            return Vec::new();
+        }
         let mut acc: HashMap<u32, ([f64; 2], u32)> = HashMap::new();
         for &(c, v) in &self.corner_vertex {
-            if let Some(p) = pin_of_corner[c as usize] {
+            if let Some(&p) = pins.get(&c) {
                 let e = acc.entry(v).or_insert(([0.0, 0.0], 0));
                 e.0[0] += p[0];
                 e.0[1] += p[1];

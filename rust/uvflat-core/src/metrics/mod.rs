@@ -99,10 +99,20 @@ pub const ZERO_AREA_RELATIVE: f64 = 1e-15;
 /// opposite to the majority of the chart's triangles (positive wins a tie). Non-finite UVs
 /// count as flipped. Used by the reports, [`measure`] and the methods' own "no flips" checks.
 pub fn flipped_triangles(triangles: &[[u32; 3]], uv: &[[f64; 2]]) -> Vec<bool> {
-    let used: Vec<[f64; 2]> = triangles.iter().flat_map(|t| t.iter().map(|&v| uv[v as usize])).collect();
-    let (centre, size) = crate::geometry::bounding_frame(&used);
+    let used = || triangles.iter().flat_map(|t| t.iter().map(|&v| uv[v as usize]));
+    // The bounding box of the used UVs without a copy of them: its two corners have the same
+    // bounding frame as all the points (unless a coordinate is NaN at every point, or there
+    // are no points: then the points themselves).
+    let (lo, hi) = used().fold(([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]), |(lo, hi), p| {
+        ([lo[0].min(p[0]), lo[1].min(p[1])], [hi[0].max(p[0]), hi[1].max(p[1])])
+    });
+    let (centre, size) = if lo[0] <= hi[0] && lo[1] <= hi[1] {
+        crate::geometry::bounding_frame(&[lo, hi])
+    } else {
+        crate::geometry::bounding_frame(&used().collect::<Vec<_>>())
+    };
     // In the unit frame the bounding box's diagonal is at most 2√2, at least 2.
-    let (lo, hi) = used.iter().fold(([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]), |(lo, hi), p| {
+    let (lo, hi) = used().fold(([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]), |(lo, hi), p| {
         let q = [(p[0] - centre[0]) / size, (p[1] - centre[1]) / size];
         ([lo[0].min(q[0]), lo[1].min(q[1])], [hi[0].max(q[0]), hi[1].max(q[1])])
     });
