@@ -20,12 +20,14 @@ the mesh (and imports uvflat), so the unwrap's own memory shows as the differenc
 runs exactly ``--slim-iterations`` iterations (``max_iterations`` set to it and ``tolerance``
 to 0; the iterations actually run are in the ``iters`` column).
 
-Columns: triangles, seconds (median of ``--repeat`` runs), peak RSS in MB, KB per triangle of
-the peak RSS, KB per triangle above the baseline child's peak, and the iterations run.  Below
-the table: the exponent ``b`` of ``seconds ≈ a · n^b`` fitted by least squares on log–log per
-method, and pass/fail against the targets (time exponent at most 1.2 for lscm and abf; peak RSS
-under 1.5 KB per triangle for lscm and abf and 3 KB per triangle for slim, at the largest size
-run, where the interpreter's fixed memory weighs least).
+Columns: triangles, wall seconds and CPU seconds (all threads) of the call (medians of
+``--repeat`` runs), peak RSS in MB, KB per triangle of the peak RSS, KB per triangle above the
+baseline child's peak, and the iterations run.  Below the table: the exponent ``b`` of
+``seconds ≈ a · n^b`` fitted by least squares on log–log per method (and the same fit of the
+CPU seconds, steadier than wall time on a busy machine), and pass/fail against the targets
+(wall time exponent at most 1.2 for lscm and abf; peak RSS under 1.5 KB per triangle for lscm
+and abf and 3 KB per triangle for slim, at the largest size run, where the interpreter's fixed
+memory weighs least).
 
 ``--child METHOD TRIANGLES`` is the child's entry point (``METHOD`` ``baseline`` builds only).
 """
@@ -129,9 +131,10 @@ def child(method: str, triangles: int, slim_iterations: int) -> None:
         options = {}
         if method == "slim":
             options = {"max_iterations": slim_iterations, "tolerance": 0.0}
-        start = time.perf_counter()
+        start, cpu = time.perf_counter(), time.process_time()
         result = uvflat.unwrap(positions, corner_verts, face_sizes, method=method, **options)
         out["seconds"] = time.perf_counter() - start
+        out["cpu_seconds"] = time.process_time() - cpu
         out["core_seconds"] = result.seconds
         out["charts"] = len(result.charts)
         out["status"] = [c.status for c in result.charts]
@@ -165,7 +168,7 @@ def measure(methods, sizes, repeat: int, slim_iterations: int, log=print) -> lis
         base = [run_child("baseline", n, slim_iterations) for _ in range(repeat)]
         t = base[0]["triangles"]
         base_kb = statistics.median(b["max_rss_kb"] for b in base)
-        rows.append({"method": "baseline", "triangles": t, "seconds": None, "max_rss_kb": base_kb,
+        rows.append({"method": "baseline", "triangles": t, "seconds": None, "cpu_seconds": None, "max_rss_kb": base_kb,
                      "kb_per_triangle": base_kb / t, "kb_over_baseline": 0.0, "iterations": None})
         log(f"baseline {t}: {base_kb / 1024:.1f} MB")
         for method in methods:
@@ -176,6 +179,7 @@ def measure(methods, sizes, repeat: int, slim_iterations: int, log=print) -> lis
             kb = statistics.median(r["max_rss_kb"] for r in runs)
             row = {"method": method, "triangles": t,
                    "seconds": statistics.median(r["seconds"] for r in runs),
+                   "cpu_seconds": statistics.median(r["cpu_seconds"] for r in runs),
                    "max_rss_kb": kb, "kb_per_triangle": kb / t,
                    "kb_over_baseline": (kb - base_kb) / t,
                    "iterations": runs[0]["iterations"], "flips": runs[0]["flips"],
@@ -193,8 +197,9 @@ def summarize(rows: list[dict]) -> tuple[dict, list[str]]:
     for m in methods:
         mine = [r for r in rows if r["method"] == m]
         b = fit_exponent([r["triangles"] for r in mine], [r["seconds"] for r in mine])
+        b_cpu = fit_exponent([r["triangles"] for r in mine], [r["cpu_seconds"] for r in mine])
         largest = max(mine, key=lambda r: r["triangles"])
-        result[m] = {"exponent": b, "largest": largest["triangles"],
+        result[m] = {"exponent": b, "cpu_exponent": b_cpu, "largest": largest["triangles"],
                      "kb_per_triangle": largest["kb_per_triangle"],
                      "kb_over_baseline": largest["kb_over_baseline"]}
         parts = [f"- **{m}**: time exponent {b:.3f}"]
@@ -204,6 +209,7 @@ def summarize(rows: list[dict]) -> tuple[dict, list[str]]:
             parts.append(f"(target ≤ {EXPONENT_TARGET[m]}: {'pass' if ok else 'FAIL'})")
         elif m in EXPONENT_TARGET:
             parts.append("(needs two sizes or more)")
+        parts.append(f"(CPU time exponent {b_cpu:.3f})")
         parts.append(f"— at {largest['triangles']} triangles {largest['kb_per_triangle']:.3f} KB/triangle "
                      f"peak ({largest['kb_over_baseline']:.3f} above the baseline)")
         if m in KB_PER_TRIANGLE_TARGET:
@@ -216,12 +222,13 @@ def summarize(rows: list[dict]) -> tuple[dict, list[str]]:
 
 def table(rows: list[dict]) -> str:
     """The markdown table of ``rows``."""
-    out = ["| method | triangles | seconds | peak MB | KB/triangle | KB/triangle over baseline | iters |",
-           "|---|---:|---:|---:|---:|---:|---:|"]
+    out = ["| method | triangles | seconds | CPU s | peak MB | KB/triangle | KB/triangle over baseline | iters |",
+           "|---|---:|---:|---:|---:|---:|---:|---:|"]
     for r in rows:
         sec = "" if r["seconds"] is None else f"{r['seconds']:.3f}"
+        cpu = "" if r["cpu_seconds"] is None else f"{r['cpu_seconds']:.3f}"
         it = "" if r["iterations"] is None else str(r["iterations"])
-        out.append(f"| {r['method']} | {r['triangles']} | {sec} | {r['max_rss_kb'] / 1024:.1f} | "
+        out.append(f"| {r['method']} | {r['triangles']} | {sec} | {cpu} | {r['max_rss_kb'] / 1024:.1f} | "
                    f"{r['kb_per_triangle']:.3f} | {r['kb_over_baseline']:.3f} | {it} |")
     return "\n".join(out)
 

@@ -88,7 +88,7 @@ def test_run_on_tiny_sizes_prints_a_sane_table(tmp_path):
     assert report.strip() == r.stdout.strip()
     lines = [line for line in report.splitlines() if line.startswith("|")]
     header = [c.strip() for c in lines[0].strip("|").split("|")]
-    assert header[:3] == ["method", "triangles", "seconds"]
+    assert header[:4] == ["method", "triangles", "seconds", "CPU s"]
     body = [[c.strip() for c in line.strip("|").split("|")] for line in lines[2:]]
     # A baseline row then one row per method, for each size.
     assert [b[0] for b in body] == ["baseline", "lscm", "slim"] * 2
@@ -102,7 +102,7 @@ def test_run_on_tiny_sizes_prints_a_sane_table(tmp_path):
         if row["method"] == "baseline":
             assert row["seconds"] is None
             continue
-        assert row["seconds"] > 0
+        assert row["seconds"] > 0 and row["cpu_seconds"] > 0
         assert row["status"] == "solved"
         assert row["flips"] == 0
         # The unwrap's own memory is on top of the baseline's (same mesh, same interpreter).
@@ -115,4 +115,6 @@ def test_run_on_tiny_sizes_prints_a_sane_table(tmp_path):
         b = scaling.fit_exponent([r["triangles"] for r in mine], [r["seconds"] for r in mine])
         assert data["summary"][method]["exponent"] == pytest.approx(b)
         assert f"**{method}**: time exponent {b:.3f}" in report
+        b_cpu = scaling.fit_exponent([r["triangles"] for r in mine], [r["cpu_seconds"] for r in mine])
+        assert f"CPU time exponent {b_cpu:.3f}" in report
     assert "target ≤ 1.2" in report and "target < 3.0" in report
