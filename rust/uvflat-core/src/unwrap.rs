@@ -1,5 +1,7 @@
 //! The one-call pipeline: validate, split into charts, map each chart in parallel, measure.
 
+use std::collections::HashMap;
+
 use crate::charts::{build_charts_counting, build_charts_with, Chart, FaceTriangulation};
 use crate::cuts::{self, AutoSeamOptions};
 use crate::error::{Result, UvError};
@@ -227,10 +229,9 @@ pub fn unwrap(input: &MeshInput<'_>, options: &UnwrapOptions) -> Result<Unwrappe
 
     let render = if input.triangles.is_empty() { None } else { Some(FaceTriangulation::new(&mesh, input.triangles)?) };
     let (charts, non_manifold_edges) = build_charts_counting(&mesh, input.seams, input.selected, render.as_ref());
-    let mut pin_of_corner: Vec<Option<[f64; 2]>> = vec![None; n_corners];
-    for &(c, uv) in input.pins {
-        pin_of_corner[c as usize] = Some(uv);
-    }
+    // Pinned corners only (a later pin of the same corner wins): nothing per corner when
+    // there are no pins.
+    let pin_of_corner: HashMap<u32, [f64; 2]> = input.pins.iter().copied().collect();
 
     let mut avoid = vec![false; input.positions.len()];
     for &v in &options.auto_seams.avoid_vertices {
@@ -319,7 +320,7 @@ pub fn unwrap(input: &MeshInput<'_>, options: &UnwrapOptions) -> Result<Unwrappe
 fn solve_chart(
     id: usize,
     chart: &Chart,
-    pin_of_corner: &[Option<[f64; 2]>],
+    pin_of_corner: &HashMap<u32, [f64; 2]>,
     options: &UnwrapOptions,
 ) -> (ChartReport, Option<Vec<[f64; 2]>>) {
     let start = std::time::Instant::now();
@@ -433,7 +434,7 @@ struct Context<'a, 'm> {
     mesh: &'a PolyMesh<'m>,
     /// The render triangulation, so rebuilt pieces split n-gons like the input charts.
     render: Option<&'a FaceTriangulation>,
-    pins: &'a [Option<[f64; 2]>],
+    pins: &'a HashMap<u32, [f64; 2]>,
     options: &'a UnwrapOptions,
     avoid: &'a [bool],
 }

@@ -113,14 +113,24 @@ fn checked<'py>(
     Ok((arr, rows))
 }
 
-/// Contiguous copy of `arr` converted to `T`.
-fn to_vec<T: numpy::Element + Copy>(arr: &Bound<'_, PyUntypedArray>, dtype: &str) -> PyResult<Vec<T>> {
+/// `arr` as a C-contiguous array of numpy dtype `dtype` (the same array, without a copy, when
+/// it already is one), read as a slice of `T` by `read`.
+fn with_slice<T: numpy::Element + Copy, R>(
+    arr: &Bound<'_, PyUntypedArray>,
+    dtype: &str,
+    read: impl FnOnce(&[T]) -> PyResult<R>,
+) -> PyResult<R> {
     let py = arr.py();
     let np = py.import("numpy")?;
     let conv = np.call_method1("ascontiguousarray", (arr, dtype))?;
     let typed = conv.cast_into::<PyArrayDyn<T>>()?;
     let ro = typed.readonly();
-    Ok(ro.as_slice()?.to_vec())
+    read(ro.as_slice()?)
+}
+
+/// Contiguous copy of `arr` converted to `T`.
+fn to_vec<T: numpy::Element + Copy>(arr: &Bound<'_, PyUntypedArray>, dtype: &str) -> PyResult<Vec<T>> {
+    with_slice(arr, dtype, |s: &[T]| Ok(s.to_vec()))
 }
 
 /// A float array of layout `layout`, as f64 values (row-major) and its row count.
@@ -129,14 +139,34 @@ pub fn floats(obj: &Bound<'_, PyAny>, name: &str, layout: Layout) -> PyResult<(V
     Ok((to_vec::<f64>(&arr, "float64")?, rows))
 }
 
+/// A float array `(N, K)` (`label` names `N` in messages) as `N` rows of `K` f64 values: one
+/// copy straight from the caller's array when it is C-contiguous float64.
+pub fn float_rows<const K: usize>(obj: &Bound<'_, PyAny>, name: &str, label: &'static str) -> PyResult<Vec<[f64; K]>> {
+    let (arr, _) = checked(obj, name, Layout::Rows(label, K), Family::Float)?;
+    with_slice(&arr, "float64", |s: &[f64]| Ok(s.as_chunks::<K>().0.to_vec()))
+}
+
 /// A bool (or 0/1 integer) vector.
 pub fn bools(obj: &Bound<'_, PyAny>, name: &str, layout: Layout) -> PyResult<Vec<bool>> {
     let (arr, _) = checked(obj, name, layout, Family::Bool)?;
     to_vec::<bool>(&arr, "bool")
 }
 
+/// Checked `u32` copies of a slice of integers of any width.
+fn to_u32<T: Copy + TryInto<u32> + Into<i128>>(
+    s: &[T],
+    on_bad: &mut impl FnMut(usize, i128) -> PyErr,
+) -> PyResult<Vec<u32>> {
+    let mut out = Vec::with_capacity(s.len());
+    for (i, &x) in s.iter().enumerate() {
+        out.push(x.try_into().map_err(|_| on_bad(i, x.into()))?);
+    }
+    Ok(out)
+}
+
 /// An integer array, converted to `u32`. `on_bad(i, value)` builds the error for the flat
-/// element `i` whose value is negative or does not fit in `u32`.
+/// element `i` whose value is negative or does not fit in `u32`. 32- and 64-bit arrays are
+/// read in place (no intermediate widened copy); narrower ones are widened to 32 bits first.
 pub fn indices(
     obj: &Bound<'_, PyAny>,
     name: &str,
@@ -144,21 +174,13 @@ pub fn indices(
     mut on_bad: impl FnMut(usize, i128) -> PyErr,
 ) -> PyResult<(Vec<u32>, usize)> {
     let (arr, rows) = checked(obj, name, layout, Family::Int)?;
-    let unsigned = arr.dtype().kind() == b'u';
-    let out = if unsigned {
-        let v = to_vec::<u64>(&arr, "uint64")?;
-        let mut out = Vec::with_capacity(v.len());
-        for (i, &x) in v.iter().enumerate() {
-            out.push(u32::try_from(x).map_err(|_| on_bad(i, x as i128))?);
-        }
-        out
-    } else {
-        let v = to_vec::<i64>(&arr, "int64")?;
-        let mut out = Vec::with_capacity(v.len());
-        for (i, &x) in v.iter().enumerate() {
-            out.push(u32::try_from(x).map_err(|_| on_bad(i, x as i128))?);
-        }
-        out
+    let dtype = arr.dtype();
+    let unsigned = dtype.kind() == b'u';
+    let out = match (unsigned, dtype.itemsize() > 4) {
+        (false, false) => with_slice(&arr, "int32", |s: &[i32]| to_u32(s, &mut on_bad))?,
+        (false, true) => with_slice(&arr, "int64", |s: &[i64]| to_u32(s, &mut on_bad))?,
+        (true, false) => with_slice(&arr, "uint32", |s: &[u32]| Ok(s.to_vec()))?,
+        (true, true) => with_slice(&arr, "uint64", |s: &[u64]| to_u32(s, &mut on_bad))?,
     };
     Ok((out, rows))
 }

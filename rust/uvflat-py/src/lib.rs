@@ -72,7 +72,8 @@ fn read_soup(
     face_sizes: &Bound<'_, PyAny>,
 ) -> PyResult<Soup> {
     let py = positions.py();
-    let (pos, n_vertices) = floats(positions, "positions", Layout::Rows("V", 3))?;
+    let positions = convert::float_rows::<3>(positions, "positions", "V")?;
+    let n_vertices = positions.len();
     let (face_sizes, _) = indices(face_sizes, "face_sizes", Layout::Vector("F"), |face, size| {
         let msg = if size < 0 {
             format!("face {face}: has {size} corners, at least 3 are needed")
@@ -105,7 +106,7 @@ fn read_soup(
             attrs![py; "face" => face, "corner" => corner, "vertex" => vertex, "n_vertices" => n_vertices],
         )
     })?;
-    Ok(Soup { positions: convert::rows::<3, f64>(&pos), corner_verts, face_sizes })
+    Ok(Soup { positions, corner_verts, face_sizes })
 }
 
 fn read_selected(selected: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Vec<bool>>> {
@@ -374,7 +375,8 @@ fn unwrap(
                     attrs![py; "pin" => pin, "corner" => corner, "n_corners" => n_corners],
                 )
             })?;
-            let (uvs, n_uvs) = floats(u, "pin_uvs", Layout::Rows("P", 2))?;
+            let uvs = convert::float_rows::<2>(u, "pin_uvs", "P")?;
+            let n_uvs = uvs.len();
             if n_uvs != n_pins {
                 return Err(error(
                     py,
@@ -383,12 +385,12 @@ fn unwrap(
                     attrs![py; "argument" => "pin_uvs"],
                 ));
             }
-            corners.into_iter().zip(convert::rows::<2, f64>(&uvs)).collect()
+            corners.into_iter().zip(uvs).collect()
         }
     };
     let fit = match fit_to.filter(|f| !f.is_none()) {
         None => Fit::AreaScaled,
-        Some(f) => Fit::Previous(convert::rows::<2, f64>(&floats(f, "fit_to", Layout::Rows("C", 2))?.0)),
+        Some(f) => Fit::Previous(convert::float_rows::<2>(f, "fit_to", "C")?),
     };
 
     let auto_seams = read_auto_seams(py, auto_seams, max_stretch, max_cones, avoid_vertices, sharp_angle, n_vertices)?;
@@ -418,8 +420,9 @@ fn unwrap(
     let n_new = result.new_seams.len();
     let new_seams = PyArray1::from_vec(py, result.new_seams.iter().flatten().copied().collect::<Vec<u32>>()).reshape([n_new, 2])?;
     let face_solved: Vec<bool> = (0..n_faces).map(|f| result.face_solved(f)).collect();
-    let flat_uv: Vec<f64> = result.uv.iter().flat_map(|p| [p[0], p[1]]).collect();
-    let uv = PyArray1::from_vec(py, flat_uv).reshape([result.uv.len(), 2])?;
+    // The core's UVs become the array's buffer without a copy (`[f64; 2]` rows flatten in place).
+    let n_uv = result.uv.len();
+    let uv = PyArray1::from_vec(py, result.uv.into_flattened()).reshape([n_uv, 2])?;
     let charts = result
         .charts
         .iter()
@@ -484,8 +487,7 @@ fn metrics(
     triangles: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<PyMetrics> {
     let soup = read_soup(positions, corner_verts, face_sizes)?;
-    let (uv_flat, _) = floats(uv, "uv", Layout::Rows("C", 2))?;
-    let uv = convert::rows::<2, f64>(&uv_flat);
+    let uv = convert::float_rows::<2>(uv, "uv", "C")?;
     let selected = read_selected(selected)?;
     let triangles = read_triangles(py, triangles, soup.corner_verts.len())?;
     let m = run_core(py, "uv", || {

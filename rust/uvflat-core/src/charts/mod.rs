@@ -115,11 +115,16 @@ impl Chart {
         (tris, w)
     }
 
-    /// Average pinned UV per chart vertex that has a pinned corner.
-    pub fn vertex_pins(&self, pin_of_corner: &[Option<[f64; 2]>]) -> Vec<(u32, [f64; 2])> {
+    /// Average pinned UV per chart vertex that has a pinned corner. `pins` maps input corners
+    /// to their pinned UV (only the pinned corners are in it, so an unwrap without pins costs
+    /// nothing per corner).
+    pub fn vertex_pins(&self, pins: &HashMap<u32, [f64; 2]>) -> Vec<(u32, [f64; 2])> {
+        if pins.is_empty() {
+            return Vec::new();
+        }
         let mut acc: HashMap<u32, ([f64; 2], u32)> = HashMap::new();
         for &(c, v) in &self.corner_vertex {
-            if let Some(p) = pin_of_corner[c as usize] {
+            if let Some(&p) = pins.get(&c) {
                 let e = acc.entry(v).or_insert(([0.0, 0.0], 0));
                 e.0[0] += p[0];
                 e.0[1] += p[1];
@@ -334,18 +339,23 @@ pub fn build_charts_counting(
 
 fn make_chart(
     mesh: &PolyMesh<'_>,
-    faces: Vec<u32>,
+    mut faces: Vec<u32>,
     corner_root: &[u32],
     joined: &[bool],
     render: Option<&FaceTriangulation>,
 ) -> Chart {
     let positions_in = mesh.positions();
+    // A chart lives through the whole solve: its per-corner and per-triangle arrays are
+    // allocated at their final size (no growth slack), the others shrunk to fit at the end.
+    faces.shrink_to_fit();
+    let n_chart_corners: usize = faces.iter().map(|&f| mesh.face_corners(f as usize).len()).sum();
+    let n_chart_triangles = n_chart_corners - 2 * faces.len();
     let mut local_of_root: HashMap<u32, u32> = HashMap::new();
     let mut mesh_vertex = Vec::new();
     let mut positions = Vec::new();
-    let mut corner_vertex = Vec::new();
-    let mut triangles = Vec::new();
-    let mut triangle_face = Vec::new();
+    let mut corner_vertex = Vec::with_capacity(n_chart_corners);
+    let mut triangles = Vec::with_capacity(n_chart_triangles);
+    let mut triangle_face = Vec::with_capacity(n_chart_triangles);
     let mut quads = Vec::new();
     let mut polygons = Vec::new();
     // Boundary half-edges (chart vertex a → b): polygon edges not joined to another face.
@@ -353,7 +363,7 @@ fn make_chart(
     // First pass: chart vertices of every corner, and the chart's polygon edges.
     let mut edges: HashSet<u64> = HashSet::new();
     let ukey = |a: u32, b: u32| ((a.min(b) as u64) << 32) | a.max(b) as u64;
-    let mut face_local: Vec<u32> = Vec::new();
+    let mut face_local: Vec<u32> = Vec::with_capacity(n_chart_corners);
     let has_ngon = faces.iter().any(|&f| mesh.face_corners(f as usize).len() > 3);
     for &f in &faces {
         let r = mesh.face_corners(f as usize);
@@ -516,6 +526,10 @@ fn make_chart(
     } else {
         ChartKind::DiskWithHoles
     };
+    mesh_vertex.shrink_to_fit();
+    positions.shrink_to_fit();
+    triangles.shrink_to_fit();
+    triangle_face.shrink_to_fit();
     Chart {
         faces,
         corner_vertex,

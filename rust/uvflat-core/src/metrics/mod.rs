@@ -99,10 +99,20 @@ pub const ZERO_AREA_RELATIVE: f64 = 1e-15;
 /// opposite to the majority of the chart's triangles (positive wins a tie). Non-finite UVs
 /// count as flipped. Used by the reports, [`measure`] and the methods' own "no flips" checks.
 pub fn flipped_triangles(triangles: &[[u32; 3]], uv: &[[f64; 2]]) -> Vec<bool> {
-    let used: Vec<[f64; 2]> = triangles.iter().flat_map(|t| t.iter().map(|&v| uv[v as usize])).collect();
-    let (centre, size) = crate::geometry::bounding_frame(&used);
+    let used = || triangles.iter().flat_map(|t| t.iter().map(|&v| uv[v as usize]));
+    // The bounding box of the used UVs without a copy of them: its two corners have the same
+    // bounding frame as all the points (unless a coordinate is NaN at every point, or there
+    // are no points: then the points themselves).
+    let (lo, hi) = used().fold(([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]), |(lo, hi), p| {
+        ([lo[0].min(p[0]), lo[1].min(p[1])], [hi[0].max(p[0]), hi[1].max(p[1])])
+    });
+    let (centre, size) = if lo[0] <= hi[0] && lo[1] <= hi[1] {
+        crate::geometry::bounding_frame(&[lo, hi])
+    } else {
+        crate::geometry::bounding_frame(&used().collect::<Vec<_>>())
+    };
     // In the unit frame the bounding box's diagonal is at most 2√2, at least 2.
-    let (lo, hi) = used.iter().fold(([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]), |(lo, hi), p| {
+    let (lo, hi) = used().fold(([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]), |(lo, hi), p| {
         let q = [(p[0] - centre[0]) / size, (p[1] - centre[1]) / size];
         ([lo[0].min(q[0]), lo[1].min(q[1])], [hi[0].max(q[0]), hi[1].max(q[1])])
     });
@@ -798,6 +808,56 @@ mod tests {
             if pairwise { crossing += 1 } else { clean += 1 }
         }
         assert!(crossing > 50 && clean > 50, "{crossing} crossing, {clean} clean");
+    }
+
+    /// The flip test as first written: the bounding frame of a copy of every used UV.
+    fn flipped_by_copy(triangles: &[[u32; 3]], uv: &[[f64; 2]]) -> Vec<bool> {
+        let used: Vec<[f64; 2]> = triangles.iter().flat_map(|t| t.iter().map(|&v| uv[v as usize])).collect();
+        let (centre, size) = crate::geometry::bounding_frame(&used);
+        let (lo, hi) = used.iter().fold(([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]), |(lo, hi), p| {
+            let q = [(p[0] - centre[0]) / size, (p[1] - centre[1]) / size];
+            ([lo[0].min(q[0]), lo[1].min(q[1])], [hi[0].max(q[0]), hi[1].max(q[1])])
+        });
+        let diag2 = if lo[0] <= hi[0] { (hi[0] - lo[0]).powi(2) + (hi[1] - lo[1]).powi(2) } else { 0.0 };
+        let eps = ZERO_AREA_RELATIVE * diag2;
+        let areas: Vec<f64> = triangles
+            .iter()
+            .map(|t| signed_area_2d(t.map(|v| [(uv[v as usize][0] - centre[0]) / size, (uv[v as usize][1] - centre[1]) / size])))
+            .collect();
+        let pos = areas.iter().filter(|&&a| a > eps).count();
+        let neg = areas.iter().filter(|&&a| a < -eps).count();
+        let majority = if neg > pos { -1.0 } else { 1.0 };
+        areas.iter().map(|&a| !(a * majority > eps)).collect()
+    }
+
+    #[test]
+    fn flip_test_without_a_copy_of_the_uvs_agrees_with_the_copying_one() {
+        // Random triangles over random UVs (some far from the origin, some vertices unused),
+        // then the same with NaN in one coordinate of some or of every vertex, and empty.
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move || {
+            state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for case in 0..40 {
+            let n = 3 + (next() * 30.0) as usize;
+            let offset = if case % 3 == 0 { 1e6 } else { 0.0 };
+            let mut uv: Vec<[f64; 2]> = (0..n).map(|_| [offset + next() * 4.0 - 2.0, next() - 0.5]).collect();
+            let tris: Vec<[u32; 3]> = (0..1 + (next() * 40.0) as usize)
+                .map(|_| {
+                    let a = (next() * n as f64) as u32 % n as u32;
+                    [a, (a + 1) % n as u32, (a + 2) % n as u32]
+                })
+                .collect();
+            assert_eq!(flipped_triangles(&tris, &uv), flipped_by_copy(&tris, &uv), "case {case}");
+            uv[tris[0][0] as usize][1] = f64::NAN;
+            assert_eq!(flipped_triangles(&tris, &uv), flipped_by_copy(&tris, &uv), "case {case} with a NaN");
+            for p in uv.iter_mut() {
+                p[0] = f64::NAN;
+            }
+            assert_eq!(flipped_triangles(&tris, &uv), flipped_by_copy(&tris, &uv), "case {case}, NaN everywhere");
+            assert!(flipped_triangles(&[], &uv).is_empty());
+        }
     }
 
     #[test]
