@@ -1009,6 +1009,7 @@ _OPTION_SAMPLES = {
     "solver": {"abf": "abf"},
     "angle_sums": {"abf": ([0], [math.pi / 2])},
     "start": {"slim": "mean_value"},
+    "step": {"slim": "proxy"},
 }
 
 

@@ -10,7 +10,7 @@ use common::*;
 use uvflat_core::charts::{build_charts, Chart};
 use uvflat_core::mesh::PolyMesh;
 use uvflat_core::methods::arap::{self, ArapOptions};
-use uvflat_core::methods::slim::{self, SlimOptions, SlimStart};
+use uvflat_core::methods::slim::{self, SlimOptions, SlimStart, SlimStep};
 use uvflat_core::{unwrap, ChartKind, ChartStatus, Method, OptionValue, UnwrapOptions};
 
 const MESHES: &[&str] = &["camelhead.off", "lion.off", "alligator.obj", "beetle.off", "halftunnel.off"];
@@ -106,9 +106,11 @@ fn energies_never_increase_for_arap_and_slim() {
         }
     }
     for (name, chart) in &charts {
-        for start in [SlimStart::Auto, SlimStart::MeanValue] {
-            let o = SlimOptions { max_iterations: 15, tolerance: 0.0, start };
+        let mut last = Vec::new();
+        for (start, step) in [(SlimStart::Auto, SlimStep::Newton), (SlimStart::MeanValue, SlimStep::Newton), (SlimStart::MeanValue, SlimStep::Proxy)] {
+            let o = SlimOptions { max_iterations: 15, tolerance: 0.0, start, step };
             let (sol, h) = slim::solve_with_history(chart, &[], &o).unwrap();
+            last.push(*h.energy.last().unwrap());
             let optimal_start = h.energy[0] - 1.0 < 1e-9;
             assert!(h.energy.len() >= 2 || optimal_start, "{name}: SLIM made no progress from {}", h.energy[0]);
             assert_eq!(h.energy.len(), h.step.len() + 1);
@@ -127,6 +129,8 @@ fn energies_never_increase_for_arap_and_slim() {
             let e = slim::symmetric_dirichlet(&ops, &tris, &sol.uv);
             assert!((e - h.energy.last().unwrap()).abs() <= 1e-12 * e, "{name}");
         }
+        // The projected Newton steps reach at least SLIM's own energy from the same start.
+        assert!(last[1] <= last[2] * (1.0 + 1e-9), "{name}: Newton steps reached {} > SLIM's {}", last[1], last[2]);
         let o = ArapOptions { max_iterations: 15, tolerance: 0.0 };
         let (sol, h) = arap::solve_with_history(chart, &[], &o).unwrap();
         assert_eq!(h.len(), sol.iterations + 1);
@@ -143,7 +147,7 @@ fn developable_surfaces_flatten_to_an_isometry() {
     for (name, s, seams) in [("cut_cylinder", &cyl, &seams[..]), ("planar_disk", &disk, &[][..])] {
         let mut input = s.input();
         input.seams = seams;
-        let slim_from_circle = SlimOptions { max_iterations: 500, tolerance: 1e-14, start: SlimStart::MeanValue };
+        let slim_from_circle = SlimOptions { max_iterations: 500, tolerance: 1e-14, start: SlimStart::MeanValue, ..Default::default() };
         for m in [
             Method::Arap(ArapOptions::default()),
             Method::Slim(SlimOptions::default()),
@@ -257,7 +261,7 @@ fn options_parse_and_validate() {
         ],
     )
     .unwrap();
-    assert_eq!(m, Method::Slim(SlimOptions { max_iterations: 7, tolerance: 1e-3, start: SlimStart::MeanValue }));
+    assert_eq!(m, Method::Slim(SlimOptions { max_iterations: 7, tolerance: 1e-3, start: SlimStart::MeanValue, ..Default::default() }));
     assert_eq!(m.name(), "slim");
     let m = Method::parse("arap", &[("max_iterations".into(), OptionValue::Int(3))]).unwrap();
     assert_eq!(m, Method::Arap(ArapOptions { max_iterations: 3, ..Default::default() }));

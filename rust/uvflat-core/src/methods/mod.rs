@@ -193,6 +193,13 @@ impl Method {
                         other => return Err(opt_err("start", format!("expected \"auto\" or \"mean_value\", got {other:?}"))),
                     }
                 }
+                ("step", "slim") => {
+                    slim_opts.step = match value {
+                        OptionValue::Str(s) if s == "newton" => slim::SlimStep::Newton,
+                        OptionValue::Str(s) if s == "proxy" => slim::SlimStep::Proxy,
+                        other => return Err(opt_err("step", format!("expected \"newton\" or \"proxy\", got {other:?}"))),
+                    }
+                }
                 _ => {
                     if !method_names().contains(&name) {
                         break;

@@ -109,6 +109,12 @@ const SLIM: &[OptionSpec] = &[
         default: OptionDefault::Str("auto"),
         doc: "flip-free start (auto: the better of LSCM, when flip-free, and mean value)",
     },
+    OptionSpec {
+        name: "step",
+        kind: OptionKind::Choice(&["newton", "proxy"]),
+        default: OptionDefault::Str("newton"),
+        doc: "steps after the first (newton: projected Newton, fewer iterations; proxy: SLIM's own)",
+    },
 ];
 
 /// The options `method` accepts (empty for a method without options or an unknown name).

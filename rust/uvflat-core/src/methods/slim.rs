@@ -27,6 +27,16 @@
 //! 3. Flip-free line search on the true energy from the current map towards the proxy
 //!    minimiser: the step never reaches a degenerate triangle and strictly decreases E.
 //!
+//! After the first iteration, [`SlimStep::Newton`] (default) replaces steps 1–2 by a projected
+//! Newton step (Teran, Sifakis, Irving & Fedkiw 2005; the analytic projection of Smith, Goes
+//! & Kim 2019, [`project_twist`]): per triangle the exact Hessian of the density with respect
+//! to J ([`density_derivatives`]) with its one possibly negative eigenvalue (the twist) set
+//! to 0, mapped to the six corner unknowns, plus `1e-6 ·` the triangle's Laplacian (definite
+//! along the global rotation). Its pattern is SLIM's, so the symbolic analysis is shared. The
+//! SLIM proxy is a good global step far from the optimum; Newton converges much faster near
+//! it (camelhead: symmetric Dirichlet 1.8618 in 8 iterations vs 1.8642 in 13). A Newton step
+//! that cannot be factored or finds no descent switches back to SLIM steps for good.
+//!
 //! Start: a flip-free map. [`SlimStart::Auto`] (default) tries LSCM and the mean value map on
 //! a circle (Floater 2003, flip-free by Tutte's theorem) and keeps whichever has no
 //! non-positive triangle and the lower energy; [`SlimStart::MeanValue`] uses only the latter.
@@ -62,6 +72,10 @@ use crate::charts::Chart;
 use crate::solvers::line_search::{all_positive, flip_free_line_search, LineSearchOptions};
 use crate::solvers::{FixedValueSolver, Symmetry};
 
+/// Weight of the Laplacian added to the projected Hessian (relative to the density's
+/// Hessian at a rotation, 8): makes the system definite along the global rotation.
+const NEWTON_REGULARISATION: f64 = 1e-6;
+
 /// Which flip-free map SLIM starts from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum SlimStart {
@@ -85,11 +99,25 @@ pub struct SlimOptions {
     pub tolerance: f64,
     /// Starting map. Default [`SlimStart::Auto`].
     pub start: SlimStart,
+    /// Steps after the first. Default [`SlimStep::Newton`].
+    pub step: SlimStep,
+}
+
+/// The steps SLIM takes after its first (module docs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SlimStep {
+    /// Projected Newton steps on the same sparsity pattern, SLIM's proxy step again if one
+    /// fails. Default: on camelhead, lion and halftunnel the energy reached is lower in 8–27%
+    /// fewer iterations (README's performance section).
+    #[default]
+    Newton,
+    /// SLIM's proxy steps throughout (the paper).
+    Proxy,
 }
 
 impl Default for SlimOptions {
     fn default() -> Self {
-        SlimOptions { max_iterations: 15, tolerance: 1e-4, start: SlimStart::Auto }
+        SlimOptions { max_iterations: 15, tolerance: 1e-4, start: SlimStart::Auto, step: SlimStep::Newton }
     }
 }
 
@@ -132,6 +160,101 @@ pub(crate) fn density(j: [[f64; 2]; 2]) -> f64 {
     }
     let fro = j[0][0] * j[0][0] + j[0][1] * j[0][1] + j[1][0] * j[1][0] + j[1][1] * j[1][1];
     fro * (1.0 + 1.0 / (det * det))
+}
+
+/// Gradient and Hessian of the symmetric Dirichlet density with respect to the Jacobian's
+/// entries `j = (J00, J01, J10, J11)`. With `I2 = ‖J‖²`, `I3 = det J` and `g3 = ∂I3/∂j`,
+/// the density is `I2 (1 + I3⁻²)`, so
+/// `∇ = 2j (1 + I3⁻²) − 2 I2 I3⁻³ g3` and
+/// `∇² = 2 (1 + I3⁻²) Id − 2 I3⁻³ (2j g3ᵀ + g3 2jᵀ) + 6 I2 I3⁻⁴ g3 g3ᵀ − 2 I2 I3⁻³ ∇²I3`.
+/// Preconditions: det J > 0.
+pub(crate) fn density_derivatives(j: [[f64; 2]; 2]) -> ([f64; 4], [[f64; 4]; 4]) {
+    let v = [j[0][0], j[0][1], j[1][0], j[1][1]];
+    let i2: f64 = v.iter().map(|x| x * x).sum();
+    let i3 = v[0] * v[3] - v[1] * v[2];
+    let g3 = [v[3], -v[2], -v[1], v[0]];
+    let (r2, r3, r4) = (1.0 / (i3 * i3), 1.0 / (i3 * i3 * i3), 1.0 / (i3 * i3 * i3 * i3));
+    let mut g = [0.0; 4];
+    let mut h = [[0.0; 4]; 4];
+    for a in 0..4 {
+        g[a] = 2.0 * v[a] * (1.0 + r2) - 2.0 * i2 * r3 * g3[a];
+        for b in 0..4 {
+            h[a][b] = -2.0 * r3 * (2.0 * v[a] * g3[b] + g3[a] * 2.0 * v[b]) + 6.0 * i2 * r4 * g3[a] * g3[b];
+        }
+        h[a][a] += 2.0 * (1.0 + r2);
+    }
+    // ∇²I3: ∂²(ad − bc) is 1 at (a, d), (d, a) and −1 at (b, c), (c, b).
+    h[0][3] -= 2.0 * i2 * r3;
+    h[3][0] -= 2.0 * i2 * r3;
+    h[1][2] += 2.0 * i2 * r3;
+    h[2][1] += 2.0 * i2 * r3;
+    (g, h)
+}
+
+/// Project the symmetric Dirichlet Hessian of [`density_derivatives`] onto the positive
+/// semidefinite cone, analytically (Smith, Goes & Kim, "Analytic eigensystems for isotropic
+/// distortion energies", 2019). For `J = U Σ Vᵀ` its eigenvectors are the two scalings
+/// `U diag(·) Vᵀ` (eigenvalues `2 + 6σᵢ⁻⁴ > 0`), the flip `U [[0,1],[1,0]] Vᵀ / √2`
+/// (eigenvalue `2 + 2(σ₂⁻³ − σ₁⁻³)/(σ₁ − σ₂) > 2`) and the twist `U [[0,−1],[1,0]] Vᵀ / √2
+/// = R₉₀ R / √2` (`R = U Vᵀ` the closest rotation) with eigenvalue
+/// `λ = 2 − 2(σ₁⁻³ + σ₂⁻³)/(σ₁ + σ₂)`, the only one that can be negative: then `−λ t tᵀ` is
+/// added. Preconditions: det J > 0.
+pub(crate) fn project_twist(j: [[f64; 2]; 2], h: &mut [[f64; 4]; 4]) {
+    let (a, b, c, d) = (j[0][0], j[0][1], j[1][0], j[1][1]);
+    let q = (0.5 * (a + d)).hypot(0.5 * (c - b));
+    let r = (0.5 * (a - d)).hypot(0.5 * (c + b));
+    let (s1, s2) = (q + r, q - r);
+    let lambda = 2.0 - 2.0 * (s1.powi(-3) + s2.powi(-3)) / (s1 + s2);
+    if lambda < 0.0 {
+        let (rc, rs) = closest_rotation(j);
+        let t = [-rs, -rc, rc, -rs].map(|x| x * std::f64::consts::FRAC_1_SQRT_2);
+        for x in 0..4 {
+            for y in 0..4 {
+                h[x][y] -= lambda * t[x] * t[y];
+            }
+        }
+    }
+}
+
+/// One triangle's projected Newton block: writes the lower-triangle entries (`local` order)
+/// of `A_f Dᵀ P(∇²) D + ε A_f (L_f ⊗ I)` into `vals` and returns the energy gradient per
+/// corner (u, v), where `D` maps the six corner unknowns to the Jacobian entries, `P` projects
+/// onto the positive semidefinite cone and the small Laplacian term `ε` removes the global
+/// rotation's null direction.
+fn newton_block(ops: &TriangleOperators, f: usize, t: &[u32; 3], uv: &[[f64; 2]], local: &[(usize, usize)], vals: &mut [f64]) -> [[f64; 2]; 3] {
+    let j = ops.jacobian(f, t, uv);
+    let (g, mut h) = density_derivatives(j);
+    project_twist(j, &mut h);
+    let a = ops.area[f];
+    let gr = &ops.grad[f];
+    // d[k][p]: derivative of Jacobian entry k by local unknown p (corner p / 2, u or v).
+    let mut d = [[0.0; 6]; 4];
+    for i in 0..3 {
+        d[0][2 * i] = gr[0][i];
+        d[1][2 * i] = gr[1][i];
+        d[2][2 * i + 1] = gr[0][i];
+        d[3][2 * i + 1] = gr[1][i];
+    }
+    let l = ops.stiffness(f);
+    for (k, &(p, q)) in local.iter().enumerate() {
+        let mut s = 0.0;
+        for x in 0..4 {
+            if d[x][p] == 0.0 {
+                continue;
+            }
+            for y in 0..4 {
+                s += d[x][p] * h[x][y] * d[y][q];
+            }
+        }
+        let reg = if p % 2 == q % 2 { NEWTON_REGULARISATION * l[p / 2][q / 2] } else { 0.0 };
+        vals[k] = a * (s + reg);
+    }
+    let mut out = [[0.0; 2]; 3];
+    for i in 0..3 {
+        out[i][0] = a * (g[0] * gr[0][i] + g[1] * gr[1][i]);
+        out[i][1] = a * (g[2] * gr[0][i] + g[3] * gr[1][i]);
+    }
+    out
 }
 
 /// Scale `uv` about the origin by the factor minimising the symmetric Dirichlet energy
@@ -332,8 +455,57 @@ pub fn solve_with_history(
     let mut change = 0.0;
     let mut iterations = 0;
     let mut stopped = None;
+    let (mut newton_steps, mut newton_failed) = (0usize, false);
+    let zero_fixed = vec![vec![0.0; fixed_ids.len()]];
+    let mut newton = false;
     while iterations < options.max_iterations && !crate::progress::cancelled() {
         let t0 = Instant::now();
+        if newton {
+            // Projected Newton step (module docs): same pattern, same factorization analysis.
+            let grads: Vec<[[f64; 2]; 3]> = values
+                .par_chunks_mut(local.len())
+                .zip(tris.par_iter().enumerate())
+                .with_min_len(1024)
+                .map(|(vals, (f, t))| newton_block(&ops, f, t, &uv, &local, vals))
+                .collect();
+            let mut b = vec![0.0; 2 * n];
+            for (t, g) in tris.iter().zip(&grads) {
+                for i in 0..3 {
+                    b[2 * t[i] as usize] -= g[i][0];
+                    b[2 * t[i] as usize + 1] -= g[i][1];
+                }
+            }
+            let t1 = Instant::now();
+            let s = solver.as_mut().expect("Newton steps follow a SLIM step");
+            let factored = s.refactor(&values);
+            let t2 = Instant::now();
+            match factored.and_then(|()| s.solve(&zero_fixed, &[b])) {
+                Ok(x) => {
+                    let dir: Vec<[f64; 2]> = (0..n).map(|i| [x[0][2 * i], x[0][2 * i + 1]]).collect();
+                    let t3 = Instant::now();
+                    let out = flip_free_line_search(tris, &mut uv, &dir, energy, |q| symmetric_dirichlet(&ops, tris, q), &ls);
+                    let t4 = Instant::now();
+                    history.seconds.push([(t1 - t0).as_secs_f64(), (t2 - t1).as_secs_f64(), (t3 - t2).as_secs_f64(), (t4 - t3).as_secs_f64()]);
+                    iterations += 1;
+                    newton_steps += 1;
+                    if out.step > 0.0 {
+                        history.energy.push(out.energy);
+                        history.step.push(out.step);
+                        change = (energy - out.energy) / energy;
+                        energy = out.energy;
+                        if change < options.tolerance {
+                            break;
+                        }
+                        continue;
+                    }
+                }
+                Err(_) => {}
+            }
+            // The Newton step failed (system not definite, or no descent): SLIM again.
+            newton = false;
+            newton_failed = true;
+            continue;
+        }
         let rhs_parts: Vec<[[f64; 2]; 3]> = values
             .par_chunks_mut(local.len())
             .zip(tris.par_iter().enumerate())
@@ -404,8 +576,9 @@ pub fn solve_with_history(
         if change < options.tolerance {
             break;
         }
+        newton = !newton_failed && options.step == SlimStep::Newton;
     }
-    let mut note = format!("symmetric Dirichlet {energy:.6} after {iterations} iteration(s), started from {start_name}");
+    let mut note = format!("symmetric Dirichlet {energy:.6} after {iterations} iteration(s) ({newton_steps} Newton), started from {start_name}");
     if let Some(reason) = stopped {
         note = format!("{note}; stopped early, the global step failed: {reason}");
     }
@@ -419,6 +592,63 @@ pub fn solve_with_history(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn jacobian_of(s1: f64, s2: f64, u: f64, v: f64) -> [[f64; 2]; 2] {
+        let ru = [[u.cos(), -u.sin()], [u.sin(), u.cos()]];
+        let rv = [[v.cos(), -v.sin()], [v.sin(), v.cos()]];
+        let mut j = [[0.0; 2]; 2];
+        for a in 0..2 {
+            for b in 0..2 {
+                j[a][b] = ru[a][0] * s1 * rv[b][0] + ru[a][1] * s2 * rv[b][1];
+            }
+        }
+        j
+    }
+
+    #[test]
+    fn density_derivatives_match_finite_differences() {
+        for &(s1, s2, u, v) in &[(1.0, 1.0, 0.3, -0.2), (2.5, 0.4, 0.7, -1.1), (0.3, 0.2, 2.0, 0.5), (1.2, 0.9, -0.4, 0.0)] {
+            let j = jacobian_of(s1, s2, u, v);
+            let (g, h) = density_derivatives(j);
+            let f = |x: [f64; 4]| density([[x[0], x[1]], [x[2], x[3]]]);
+            let x0 = [j[0][0], j[0][1], j[1][0], j[1][1]];
+            let eps = 1e-6;
+            for a in 0..4 {
+                let (mut xp, mut xm) = (x0, x0);
+                xp[a] += eps;
+                xm[a] -= eps;
+                let fd = (f(xp) - f(xm)) / (2.0 * eps);
+                assert!((fd - g[a]).abs() <= 1e-6 * (1.0 + g[a].abs()), "gradient {a}: {fd} vs {}", g[a]);
+                let (gp, gm) = (density_derivatives([[xp[0], xp[1]], [xp[2], xp[3]]]).0, density_derivatives([[xm[0], xm[1]], [xm[2], xm[3]]]).0);
+                for b in 0..4 {
+                    let fd = (gp[b] - gm[b]) / (2.0 * eps);
+                    assert!((fd - h[a][b]).abs() <= 1e-5 * (1.0 + h[a][b].abs()), "Hessian {a}{b}: {fd} vs {}", h[a][b]);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn analytic_projection_equals_the_eigen_decomposition() {
+        let mut negative_seen = false;
+        for k in 0..200 {
+            let t = k as f64;
+            let (s1, s2) = (0.15 + 3.0 * (0.37 * t).sin().abs(), 0.1 + 2.0 * (0.61 * t + 0.3).cos().abs());
+            let j = jacobian_of(s1.max(s2), s1.min(s2), 0.13 * t, -0.29 * t);
+            let (_, h) = density_derivatives(j);
+            let want = crate::methods::mips::project_psd4(&h);
+            let mut got = h;
+            project_twist(j, &mut got);
+            negative_seen |= got != h;
+            let scale = h.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
+            for a in 0..4 {
+                for b in 0..4 {
+                    assert!((got[a][b] - want[a][b]).abs() <= 1e-8 * scale, "{k}: ({a},{b}) {} vs {}", got[a][b], want[a][b]);
+                }
+            }
+        }
+        assert!(negative_seen, "no Jacobian with a negative twist eigenvalue was tested");
+    }
 
     #[test]
     fn reweighting_matches_the_svd_and_the_energy_matches_singular_values() {

@@ -129,7 +129,8 @@ def unwrap(positions, corner_verts, face_sizes, *, method="lscm", seams=None, se
               pi/2 makes a right-angled corner; an interior sum other than 2*pi is a cone).
             * arap: ``max_iterations`` (default 100), ``tolerance`` (default 1e-6).
             * slim: ``max_iterations`` (default 15), ``tolerance`` (default 1e-4), ``start``
-              "auto" (default) or "mean_value".
+              "auto" (default) or "mean_value"; ``step`` "newton" (default), projected Newton
+              steps after the first, or "proxy", SLIM's own steps throughout.
             * mips: ``max_iterations`` (default 50), ``tolerance`` (default 1e-6).
             * scaffold: ``max_iterations`` (default 100), ``tolerance`` (default 1e-4).
 

@@ -55,6 +55,8 @@ class UnwrapOptions(TypedDict, total=False):
     """abf: ((K,) mesh vertex indices, (K,) angle sums in radians)."""
     start: Literal["auto", "mean_value"]
     """slim: flip-free start, "auto" (default) or "mean_value"."""
+    step: Literal["newton", "proxy"]
+    """slim: steps after the first, "newton" (default, projected Newton) or "proxy" (SLIM's own)."""
 
 _ChartKind = Literal["disk", "disk_with_holes", "closed", "higher_genus"]
 _ChartStatus = Literal["solved", "fallback", "failed"]
