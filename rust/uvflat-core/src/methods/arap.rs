@@ -40,8 +40,6 @@ use crate::solvers::{FixedValueSolver, Symmetry};
 pub use super::nonlinear::energy::arap_energy;
 pub use super::nonlinear::proxy::closest_rotation;
 pub use super::nonlinear::TriangleOperators;
-/// Kept for SLIM until it moves onto the kernel.
-pub(crate) use super::nonlinear::pins::anchors;
 
 /// Options of the ARAP method.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -87,7 +85,7 @@ pub fn solve_with_history(
             }
         }
     }
-    let fixed = anchors(pins, &uv);
+    let fixed = super::nonlinear::pins::anchors(pins, &uv);
     let fixed_ids: Vec<u32> = fixed.iter().map(|p| p.0).collect();
     let fixed_vals = [fixed.iter().map(|p| p.1[0]).collect::<Vec<f64>>(), fixed.iter().map(|p| p.1[1]).collect::<Vec<f64>>()];
     let solver = FixedValueSolver::new(n, &trip, &fixed_ids, Symmetry::Symmetric)?;

@@ -39,6 +39,7 @@
 //! Newton system becomes a chart failure. A start with a degenerate UV triangle (infinite
 //! energy) returns the mean value map as a fallback.
 
+use super::nonlinear::hessian::{mips_derivatives, project_psd4};
 use super::nonlinear::iterate::{quads_left_out_note, Change, Iteration};
 use super::nonlinear::jacobian::flat;
 use super::nonlinear::pattern::{block_triplets, by_component, BLOCK};
@@ -67,89 +68,6 @@ impl Default for MipsOptions {
     fn default() -> Self {
         MipsOptions { max_iterations: 50, tolerance: 1e-6 }
     }
-}
-
-/// Gradient and Hessian of ‖J‖²/det J with respect to (J00, J01, J10, J11), for det J > 0.
-fn mips_derivatives(j: [f64; 4]) -> ([f64; 4], [[f64; 4]; 4]) {
-    let n: f64 = j.iter().map(|x| x * x).sum();
-    let d = j[0] * j[3] - j[1] * j[2];
-    let g = [j[3], -j[2], -j[1], j[0]]; // ∇ det
-    let mut grad = [0.0; 4];
-    for k in 0..4 {
-        grad[k] = 2.0 * j[k] / d - n * g[k] / (d * d);
-    }
-    let mut h = [[0.0; 4]; 4];
-    for a in 0..4 {
-        for b in 0..4 {
-            let mut v = -2.0 * (j[a] * g[b] + g[a] * j[b]) / (d * d) + 2.0 * n * g[a] * g[b] / (d * d * d);
-            if a == b {
-                v += 2.0 / d;
-            }
-            h[a][b] = v;
-        }
-    }
-    // ∂² det: entries (0,3), (3,0) = 1; (1,2), (2,1) = −1.
-    let s = n / (d * d);
-    h[0][3] -= s;
-    h[3][0] -= s;
-    h[1][2] += s;
-    h[2][1] += s;
-    (grad, h)
-}
-
-/// Project a symmetric 4×4 matrix onto the positive semidefinite cone (cyclic Jacobi
-/// eigen-decomposition, negative eigenvalues set to zero).
-pub(crate) fn project_psd4(a: &[[f64; 4]; 4]) -> [[f64; 4]; 4] {
-    let mut m = *a;
-    let mut v = [[0.0; 4]; 4];
-    for i in 0..4 {
-        v[i][i] = 1.0;
-    }
-    let scale: f64 = m.iter().flatten().map(|x| x.abs()).fold(0.0, f64::max);
-    if !(scale > 0.0) || !scale.is_finite() {
-        return [[0.0; 4]; 4];
-    }
-    for _sweep in 0..30 {
-        let off: f64 = (0..4).flat_map(|p| (0..4).filter(move |&q| q != p).map(move |q| (p, q))).map(|(p, q)| m[p][q] * m[p][q]).sum();
-        if off <= 1e-30 * scale * scale {
-            break;
-        }
-        for p in 0..3 {
-            for q in p + 1..4 {
-                if m[p][q].abs() <= 1e-300 {
-                    continue;
-                }
-                let theta = (m[q][q] - m[p][p]) / (2.0 * m[p][q]);
-                let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
-                let t = if theta == 0.0 { 1.0 } else { t };
-                let c = 1.0 / (t * t + 1.0).sqrt();
-                let s = t * c;
-                for k in 0..4 {
-                    let (mkp, mkq) = (m[k][p], m[k][q]);
-                    m[k][p] = c * mkp - s * mkq;
-                    m[k][q] = s * mkp + c * mkq;
-                }
-                for k in 0..4 {
-                    let (mpk, mqk) = (m[p][k], m[q][k]);
-                    m[p][k] = c * mpk - s * mqk;
-                    m[q][k] = s * mpk + c * mqk;
-                }
-                for k in 0..4 {
-                    let (vkp, vkq) = (v[k][p], v[k][q]);
-                    v[k][p] = c * vkp - s * vkq;
-                    v[k][q] = s * vkp + c * vkq;
-                }
-            }
-        }
-    }
-    let lam: [f64; 4] = [m[0][0].max(0.0), m[1][1].max(0.0), m[2][2].max(0.0), m[3][3].max(0.0)];
-    let mut out = [[0.0; 4]; 4];
-    for a in 0..4 {
-        for b in 0..4 {
-            out[a][b] = (0..4).map(|k| v[a][k] * lam[k] * v[b][k]).sum();
-        }
-    }
-    out
 }
 
 /// Map one chart; see the module docs.
@@ -292,69 +210,4 @@ pub fn solve_with_history(
         None => started,
     });
     Ok((sol, it.history))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn psd_projection_keeps_psd_matrices_and_clips_negative_eigenvalues() {
-        let a = [[2.0, 1.0, 0.0, 0.0], [1.0, 2.0, 0.0, 0.0], [0.0, 0.0, 3.0, 0.0], [0.0, 0.0, 0.0, 1.0]];
-        let p = project_psd4(&a);
-        for i in 0..4 {
-            for j in 0..4 {
-                assert!((p[i][j] - a[i][j]).abs() < 1e-12);
-            }
-        }
-        // diag(1, −2, 3, −4) rotated: projection is diag(1, 0, 3, 0) rotated the same way.
-        let (c, s) = (0.6f64, 0.8f64);
-        let q = [[c, -s, 0.0, 0.0], [s, c, 0.0, 0.0], [0.0, 0.0, c, s], [0.0, 0.0, -s, c]];
-        let d = [1.0, -2.0, 3.0, -4.0];
-        let mk = |d: [f64; 4]| {
-            let mut m = [[0.0; 4]; 4];
-            for i in 0..4 {
-                for j in 0..4 {
-                    m[i][j] = (0..4).map(|k| q[i][k] * d[k] * q[j][k]).sum();
-                }
-            }
-            m
-        };
-        let p = project_psd4(&mk(d));
-        let want = mk([1.0, 0.0, 3.0, 0.0]);
-        for i in 0..4 {
-            for j in 0..4 {
-                assert!((p[i][j] - want[i][j]).abs() < 1e-12, "{p:?}");
-            }
-        }
-    }
-
-    fn density4(j: [f64; 4]) -> f64 {
-        mips_density([[j[0], j[1]], [j[2], j[3]]])
-    }
-
-    #[test]
-    fn mips_derivatives_match_finite_differences() {
-        let j = [1.3, 0.4, -0.2, 0.9];
-        let (g, h) = mips_derivatives(j);
-        let eps = 1e-6;
-        for k in 0..4 {
-            let (mut jp, mut jm) = (j, j);
-            jp[k] += eps;
-            jm[k] -= eps;
-            let fd = (density4(jp) - density4(jm)) / (2.0 * eps);
-            assert!((fd - g[k]).abs() < 1e-6, "gradient {k}: {fd} vs {}", g[k]);
-            let (gp, _) = mips_derivatives(jp);
-            let (gm, _) = mips_derivatives(jm);
-            for l in 0..4 {
-                let fd = (gp[l] - gm[l]) / (2.0 * eps);
-                assert!((fd - h[l][k]).abs() < 1e-5, "hessian {l},{k}: {fd} vs {}", h[l][k]);
-            }
-        }
-        // Conformal J (a scaled rotation): energy 2, gradient zero.
-        let (c, s) = (0.8 * 1.7, 0.6 * 1.7);
-        let jc = [c, -s, s, c];
-        assert!((density4(jc) - 2.0).abs() < 1e-12);
-        assert!(mips_derivatives(jc).0.iter().all(|x| x.abs() < 1e-12));
-    }
 }

@@ -58,6 +58,12 @@ impl Iteration {
         self.change = 0.0;
     }
 
+    /// An iteration that took no step, after which the method tries another kind of step
+    /// (SLIM after a failed Newton step): counted, nothing else changes.
+    pub fn counted(&mut self) {
+        self.iterations += 1;
+    }
+
     /// An iteration reached `energy`: counted and recorded; returns whether to stop (the
     /// relative change is below the tolerance).
     pub fn record(&mut self, energy: f64) -> bool {

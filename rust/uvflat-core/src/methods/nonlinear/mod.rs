@@ -7,6 +7,8 @@
 //!   Jacobian ([`TriangleOperators`]), one type for every method;
 //! * [`energy`]: the distortion densities (symmetric Dirichlet, MIPS, ARAP), their
 //!   area-weighted chart energies, and the energy-optimal uniform scale;
+//! * [`hessian`]: the densities' gradients and Hessians by the Jacobian, projected onto the
+//!   positive semidefinite cone for Newton steps (MIPS, SLIM);
 //! * [`proxy`]: the local steps: closest rotation (ARAP) and SLIM's reweighted proxy;
 //! * [`start`]: flip-free starting maps (LSCM, mean value on a circle) and the choice among them;
 //! * [`pins`]: how methods whose energy ignores pins honour them (anchors of a global step, a
@@ -17,6 +19,7 @@
 //!   cancellation, and the report's notes.
 
 pub mod energy;
+pub mod hessian;
 pub mod iterate;
 pub mod jacobian;
 pub mod pattern;
