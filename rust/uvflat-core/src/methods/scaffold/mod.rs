@@ -159,11 +159,14 @@ pub struct ScaffoldHistory {
     pub start_seconds: f64,
 }
 
+/// A valid starting map: UVs, its energy and its name.
+type Start = (Vec<[f64; 2]>, f64, &'static str);
+
 /// The valid start with the lowest energy, each candidate scaled optimally: LSCM and the mean
 /// value map on a circle (Floater 2003, an embedding by Tutte's theorem up to round-off). Valid:
 /// every chart triangle positive, finite energy, no boundary self-overlap, and a scaffold can
 /// be built around it. `None` when no candidate is valid (the reasons are returned).
-fn pick_start(chart: &Chart, ops: &TriangleOperators) -> (Option<(Vec<[f64; 2]>, f64, &'static str)>, Vec<String>) {
+fn pick_start(chart: &Chart, ops: &TriangleOperators) -> (Option<Start>, Vec<String>) {
     let tris = &chart.triangles;
     let (candidates, mut rejected) = start::candidate_starts(chart, &[], true);
     let best = start::pick(
@@ -312,7 +315,7 @@ fn run(
         all.extend_from_slice(&scaffold.box_points);
         let s_tris = &scaffold.triangles;
         let s_ops = TriangleOperators::planar(&all, s_tris);
-        if s_ops.area.iter().any(|&a| a == 0.0) {
+        if s_ops.area.contains(&0.0) {
             // Cannot happen: fresh scaffolds are checked above, kept ones stayed positive.
             stop_note = Some("scaffold iterations stopped early: a degenerate scaffold triangle".into());
             break;
