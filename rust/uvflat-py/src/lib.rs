@@ -5,6 +5,14 @@
 //! every [`UvError`] to its Python exception and returns numpy arrays. No numerics here.
 
 mod convert;
+
+/// mimalloc instead of the system allocator: an unwrap of thousands of small charts makes
+/// millions of small allocations across the worker threads, which glibc's allocator serves
+/// by growing and trimming its heaps (page faults and zeroing) — measured 1.3–1.6× slower
+/// end to end on a 47k-chart mesh.
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 mod errors;
 mod options;
 mod results;

@@ -352,6 +352,12 @@ pub fn chart_metrics_with_quads(
 /// Whether the UV boundary (all loops of one chart) crosses or touches itself anywhere other
 /// than at the shared endpoint of consecutive edges.
 pub fn boundary_self_overlap(uv: &[[f64; 2]], loops: &[Vec<u32>]) -> bool {
+    self_overlap_with(uv, loops, BRUTE_FORCE_SEGMENTS)
+}
+
+/// [`boundary_self_overlap`], testing every pair of segments when there are at most
+/// `brute_force` of them and through a uniform grid otherwise.
+fn self_overlap_with(uv: &[[f64; 2]], loops: &[Vec<u32>], brute_force: usize) -> bool {
     let mut segs: Vec<(u32, u32)> = Vec::new();
     for lp in loops {
         for i in 0..lp.len() {
@@ -376,6 +382,34 @@ pub fn boundary_self_overlap(uv: &[[f64; 2]], loops: &[Vec<u32>]) -> bool {
     if !(extent > 0.0) {
         return true; // everything collapsed onto one point
     }
+    // Whether segments i and j overlap (consecutive ones only if they fold back).
+    let crossing = |i: usize, j: usize| -> bool {
+        let (s, t) = (segs[i], segs[j]);
+        let shared = s.0 == t.0 || s.0 == t.1 || s.1 == t.0 || s.1 == t.1;
+        let (p1, p2, p3, p4) = (uv[s.0 as usize], uv[s.1 as usize], uv[t.0 as usize], uv[t.1 as usize]);
+        if shared {
+            if s.0 == t.1 && s.1 == t.0 {
+                return false; // a two-edge loop
+            }
+            let (o, a, b) = if s.1 == t.0 {
+                (p2, p1, p4)
+            } else if s.0 == t.1 {
+                (p1, p2, p3)
+            } else if s.0 == t.0 {
+                (p1, p2, p4)
+            } else {
+                (p2, p1, p3)
+            };
+            let u = [a[0] - o[0], a[1] - o[1]];
+            let v = [b[0] - o[0], b[1] - o[1]];
+            return cross2(u, v) == 0.0 && u[0] * v[0] + u[1] * v[1] > 0.0;
+        }
+        segments_intersect(p1, p2, p3, p4)
+    };
+    // Small outlines (the many tiny charts of a Smart UV Project cut): every pair, no grid.
+    if n <= brute_force {
+        return (0..n).any(|i| (i + 1..n).any(|j| crossing(i, j)));
+    }
     let cell = (total_len / n as f64).max(extent / 1024.0);
     let nx = (((hi[0] - lo[0]) / cell) as usize + 1).min(1024);
     let ny = (((hi[1] - lo[1]) / cell) as usize + 1).min(1024);
@@ -390,41 +424,12 @@ pub fn boundary_self_overlap(uv: &[[f64; 2]], loops: &[Vec<u32>]) -> bool {
             }
         }
     }
-    for bucket in grid.values() {
-        for x in 0..bucket.len() {
-            for y in x + 1..bucket.len() {
-                let (s, t) = (segs[bucket[x] as usize], segs[bucket[y] as usize]);
-                let shared = s.0 == t.0 || s.0 == t.1 || s.1 == t.0 || s.1 == t.1;
-                let (p1, p2, p3, p4) = (uv[s.0 as usize], uv[s.1 as usize], uv[t.0 as usize], uv[t.1 as usize]);
-                if shared {
-                    // Consecutive edges: overlap only if they fold back onto each other.
-                    if s.0 == t.1 && s.1 == t.0 {
-                        continue; // a two-edge loop
-                    }
-                    let (o, a, b) = if s.1 == t.0 {
-                        (p2, p1, p4)
-                    } else if s.0 == t.1 {
-                        (p1, p2, p3)
-                    } else if s.0 == t.0 {
-                        (p1, p2, p4)
-                    } else {
-                        (p2, p1, p3)
-                    };
-                    let u = [a[0] - o[0], a[1] - o[1]];
-                    let v = [b[0] - o[0], b[1] - o[1]];
-                    if cross2(u, v) == 0.0 && u[0] * v[0] + u[1] * v[1] > 0.0 {
-                        return true;
-                    }
-                    continue;
-                }
-                if segments_intersect(p1, p2, p3, p4) {
-                    return true;
-                }
-            }
-        }
-    }
-    false
+    grid.values().any(|bucket| (0..bucket.len()).any(|x| (x + 1..bucket.len()).any(|y| crossing(bucket[x] as usize, bucket[y] as usize))))
 }
+
+/// Outlines of at most this many segments are tested pair by pair in
+/// [`boundary_self_overlap`] (cheaper than building its grid).
+const BRUTE_FORCE_SEGMENTS: usize = 24;
 
 fn orient(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
     (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
@@ -759,6 +764,41 @@ pub fn aggregate(per_chart: Vec<ChartMetrics>) -> MeshMetrics {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The pairwise test of small outlines and the grid agree, on random polygons (most
+    /// crossing themselves), on regular ones (never) and on outlines folding back on an edge.
+    #[test]
+    fn pairwise_and_grid_overlap_tests_agree() {
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut rnd = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut crossing, mut clean) = (0, 0);
+        for case in 0..400 {
+            let k = 3 + case % 20;
+            let uv: Vec<[f64; 2]> = if case % 3 == 0 {
+                (0..k).map(|i| {
+                    let a = std::f64::consts::TAU * i as f64 / k as f64;
+                    [a.cos(), a.sin()]
+                })
+                .collect()
+            } else {
+                (0..k).map(|_| [rnd(), rnd()]).collect()
+            };
+            let mut loops = vec![(0..k as u32).collect::<Vec<u32>>()];
+            if case % 7 == 1 {
+                loops[0].insert(2, 1); // the outline goes back along edge 1–2
+            }
+            let pairwise = self_overlap_with(&uv, &loops, usize::MAX);
+            let grid = self_overlap_with(&uv, &loops, 0);
+            assert_eq!(pairwise, grid, "case {case}: {uv:?}");
+            if pairwise { crossing += 1 } else { clean += 1 }
+        }
+        assert!(crossing > 50 && clean > 50, "{crossing} crossing, {clean} clean");
+    }
 
     #[test]
     fn singular_values_of_known_matrices() {

@@ -90,13 +90,22 @@ enum Symbolic<T> {
     /// `Sync`).
     Llt { symbolic: Box<SymbolicCholesky<usize>>, l_values: Vec<T>, mem: std::sync::Mutex<MemBuffer> },
     Lu(SymbolicLu<usize>),
+    /// At most [`DENSE_MAX`] free unknowns: dense factorizations, no symbolic analysis (the
+    /// charts of one or a few faces that Smart UV Project makes by the thousand).
+    Dense,
 }
 
 enum Factor<T> {
     /// The values of the last successful Cholesky factorization are in `Symbolic::Llt`.
     Llt,
     Lu(Box<Lu<usize, T>>),
+    DenseLlt(Box<faer::linalg::solvers::Llt<T>>),
+    DenseLu(Box<faer::linalg::solvers::PartialPivLu<T>>),
 }
+
+/// Systems with at most this many free unknowns are factored dense: below this size a dense
+/// factorization costs less than the sparse ordering and symbolic analysis alone.
+pub const DENSE_MAX: usize = 24;
 
 /// Where an input triplet goes.
 #[derive(Clone, Copy)]
@@ -173,6 +182,11 @@ impl<T: Scalar> FixedValueSolver<T> {
     /// [`SolveError::NotPositiveDefinite`] / [`SolveError::Singular`] when `Q_FF` cannot be
     /// factored, [`SolveError::Other`] on allocation failure.
     pub fn new(n: usize, triplets: &[(u32, u32, T)], fixed: &[u32], symmetry: Symmetry) -> Result<Self, SolveError> {
+        Self::new_with_dense_max(n, triplets, fixed, symmetry, DENSE_MAX)
+    }
+
+    /// [`FixedValueSolver::new`], factoring dense up to `dense_max` free unknowns.
+    fn new_with_dense_max(n: usize, triplets: &[(u32, u32, T)], fixed: &[u32], symmetry: Symmetry, dense_max: usize) -> Result<Self, SolveError> {
         let mut free_pos = vec![0u32; n];
         for &c in fixed {
             free_pos[c as usize] = u32::MAX;
@@ -214,6 +228,7 @@ impl<T: Scalar> FixedValueSolver<T> {
         let sum_order = compressed_order(nf, &pairs);
         let nnz_ff = ff_symbolic.row_idx().len();
         let symbolic = match symmetry {
+            _ if nf <= dense_max => Symbolic::Dense,
             Symmetry::Symmetric => {
                 let other = |e: &dyn std::fmt::Debug| SolveError::Other(format!("{e:?}"));
                 let a = ff_symbolic.as_ref();
@@ -291,6 +306,33 @@ impl<T: Scalar> FixedValueSolver<T> {
                 faer::sparse::linalg::LuError::SymbolicSingular { .. } => SolveError::Singular,
                 other => SolveError::Other(format!("{other:?}")),
             })?)),
+            Symbolic::Dense => {
+                let nf = self.free.len();
+                let mut dense = Mat::<T>::from_fn(nf, nf, |_, _| T::zero_value());
+                let (cp, ri) = (self.ff_symbolic.col_ptr(), self.ff_symbolic.row_idx());
+                for c in 0..nf {
+                    for k in cp[c]..cp[c + 1] {
+                        let (r, v) = (ri[k], self.ff_values[k]);
+                        dense[(r, c)] += v;
+                        if self.symmetry == Symmetry::Symmetric && r != c {
+                            dense[(c, r)] += v.conjugate();
+                        }
+                    }
+                }
+                match self.symmetry {
+                    Symmetry::Symmetric => {
+                        Factor::DenseLlt(Box::new(dense.llt(Side::Lower).map_err(|_| SolveError::NotPositiveDefinite)?))
+                    }
+                    Symmetry::General => {
+                        let lu = dense.partial_piv_lu();
+                        let u = lu.U();
+                        if (0..nf).any(|i| u[(i, i)] == T::zero_value() || !u[(i, i)].finite()) {
+                            return Err(SolveError::Singular);
+                        }
+                        Factor::DenseLu(Box::new(lu))
+                    }
+                }
+            }
         });
         Ok(())
     }
@@ -341,6 +383,8 @@ impl<T: Scalar> FixedValueSolver<T> {
                 LltRef::new(symbolic, l_values).solve_in_place_with_conj(faer::Conj::No, rhs.as_mut(), par, MemStack::new(&mut mem));
             }
             (Some(Factor::Lu(f)), _) => f.solve_in_place(rhs.as_mut()),
+            (Some(Factor::DenseLlt(f)), _) => f.solve_in_place(rhs.as_mut()),
+            (Some(Factor::DenseLu(f)), _) => f.solve_in_place(rhs.as_mut()),
             _ => return Err(SolveError::NotPositiveDefinite),
         }
         let mut out = Vec::with_capacity(k);
@@ -365,6 +409,68 @@ impl<T: Scalar> FixedValueSolver<T> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The dense path of small systems and the sparse path solve the same systems to
+    /// round-off: symmetric, general and complex Hermitian, with fixed unknowns; and both
+    /// refuse a singular one.
+    #[test]
+    fn dense_and_sparse_factorizations_agree() {
+        // A 4 × 5 grid graph: Laplacian + small shift, made non-symmetric for `General`.
+        let (w, h) = (4u32, 5u32);
+        let n = (w * h) as usize;
+        let mut edges = Vec::new();
+        for j in 0..h {
+            for i in 0..w {
+                let v = j * w + i;
+                if i + 1 < w {
+                    edges.push((v, v + 1));
+                }
+                if j + 1 < h {
+                    edges.push((v, v + w));
+                }
+            }
+        }
+        let fixed = [0u32, 7, 19];
+        let fixed_values = vec![vec![1.0, -2.0, 0.5]];
+        let b = vec![(0..n).map(|i| (i as f64 * 0.37).sin()).collect::<Vec<f64>>()];
+        for sym in [Symmetry::Symmetric, Symmetry::General] {
+            let mut t: Vec<(u32, u32, f64)> = (0..n as u32).map(|v| (v, v, 0.1)).collect();
+            for (k, &(a, c)) in edges.iter().enumerate() {
+                let skew = if sym == Symmetry::General { 0.3 * ((k % 3) as f64 - 1.0) } else { 0.0 };
+                let wgt = 1.0 + 0.1 * k as f64;
+                t.extend([(a, a, wgt), (c, c, wgt), (c, a, -wgt + skew), (a, c, -wgt - skew)]);
+            }
+            let dense = FixedValueSolver::new_with_dense_max(n, &t, &fixed, sym, usize::MAX).unwrap();
+            let sparse = FixedValueSolver::new_with_dense_max(n, &t, &fixed, sym, 0).unwrap();
+            assert!(matches!(dense.symbolic, Symbolic::Dense) && !matches!(sparse.symbolic, Symbolic::Dense));
+            let (xd, xs) = (dense.solve(&fixed_values, &b).unwrap(), sparse.solve(&fixed_values, &b).unwrap());
+            for i in 0..n {
+                assert!((xd[0][i] - xs[0][i]).abs() < 1e-12 * (1.0 + xs[0][i].abs()), "{sym:?} {i}: {} vs {}", xd[0][i], xs[0][i]);
+            }
+        }
+        // Complex Hermitian: conformal-like entries with an imaginary part off the diagonal.
+        let mut t: Vec<(u32, u32, faer::c64)> = (0..n as u32).map(|v| (v, v, faer::c64::new(0.1, 0.0))).collect();
+        for (k, &(a, c)) in edges.iter().enumerate() {
+            let wgt = 1.0 + 0.05 * k as f64;
+            let (lo, hi) = (a.max(c), a.min(c));
+            t.extend([(a, a, faer::c64::new(wgt, 0.0)), (c, c, faer::c64::new(wgt, 0.0)), (lo, hi, faer::c64::new(-0.9 * wgt, 0.2))]);
+        }
+        let fv = vec![vec![faer::c64::new(1.0, 1.0), faer::c64::new(0.0, -1.0), faer::c64::new(2.0, 0.0)]];
+        let dense = FixedValueSolver::new_with_dense_max(n, &t, &fixed, Symmetry::Symmetric, usize::MAX).unwrap();
+        let sparse = FixedValueSolver::new_with_dense_max(n, &t, &fixed, Symmetry::Symmetric, 0).unwrap();
+        let (xd, xs) = (dense.solve(&fv, &[]).unwrap(), sparse.solve(&fv, &[]).unwrap());
+        for i in 0..n {
+            let d = xd[0][i] - xs[0][i];
+            assert!(d.re.hypot(d.im) < 1e-12, "c64 {i}");
+        }
+        // Singular: an unknown that no entry touches (a zero row and column).
+        let lap: Vec<(u32, u32, f64)> = edges.iter().flat_map(|&(a, c)| [(a, a, 1.0), (c, c, 1.0), (c, a, -1.0), (a, c, -1.0)]).collect();
+        for dense_max in [0, usize::MAX] {
+            for sym in [Symmetry::Symmetric, Symmetry::General] {
+                assert!(FixedValueSolver::new_with_dense_max(n + 1, &lap, &[0], sym, dense_max).is_err(), "{sym:?} {dense_max}");
+            }
+        }
+    }
 
     /// 1D Dirichlet problem on a path: the solution with both ends fixed is linear.
     #[test]
