@@ -8,9 +8,12 @@ on a mesh that never had them):
   the face as measured by ``uvflat.metrics`` (DESIGN.md definitions; 1 is perfect);
 * ``uvflat_flipped`` (FACE, BOOLEAN): the face's UV winding opposes its island's majority, or
   its UV area is zero;
-* ``uvflat_conformal_color`` and ``uvflat_area_color`` (CORNER, BYTE_COLOR): the same
+* ``uvflat_conformal_color`` and ``uvflat_area_color`` (CORNER, FLOAT_COLOR): the same
   distortions as a heat map (blue 1, green, yellow, red at :data:`RED_AT` or more, grey where
   not measured), shown by the sidebar's toggle through the viewport's attribute colours.
+  Float colours (stored linear, converted here from the sRGB heat colours) because Blender
+  writes them with one copy, where byte colours convert element by element (a tenth of a
+  second per million corners).
 
 Nothing here touches a mesh in edit mode; ``engine`` calls it between its mode switches.
 """
@@ -76,6 +79,36 @@ def measure(core, job, new_uv, solved):
     return np.asarray(m.face_conformal), np.asarray(m.face_area), flipped
 
 
+def srgb_to_linear(rgba):
+    """The sRGB colours ``rgba`` ((N,4), alpha kept) as linear values (IEC 61966-2-1)."""
+    out = np.array(rgba, dtype=np.float64)
+    c = out[:, :3]
+    out[:, :3] = np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+    return out
+
+
+_LEVELS = 1024  # steps of the heat scale in the stored colours (bytes held 256)
+_LINEAR_TABLE = None
+
+
+def _linear_heat_colors(values):
+    """:func:`heat_colors` as linear float32 RGBA, from a table of :data:`_LEVELS` steps of
+    the scale (the sRGB conversion's power is too slow per face on large meshes)."""
+    global _LINEAR_TABLE
+    if _LINEAR_TABLE is None:
+        t = np.linspace(0.0, 1.0, _LEVELS)
+        table = srgb_to_linear(heat_colors(np.exp(t * np.log(RED_AT))))
+        grey = srgb_to_linear(heat_colors([np.nan]))
+        _LINEAR_TABLE = np.vstack([table, grey]).astype(np.float32)
+    values = np.asarray(values, dtype=np.float64)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        t = np.clip(np.log(np.maximum(values, 1.0)) / np.log(RED_AT), 0.0, 1.0)
+    index = np.rint(np.nan_to_num(t, nan=0.0) * (_LEVELS - 1)).astype(np.int64)
+    index[np.isposinf(values)] = _LEVELS - 1
+    index[np.isnan(values)] = _LEVELS  # grey
+    return _LINEAR_TABLE[index]
+
+
 def write(mesh, face_sizes, solved, conformal, area, flipped):
     """Store the measures of the ``solved`` faces (others keep theirs, see the module doc)."""
     n_f = len(face_sizes)
@@ -89,8 +122,8 @@ def write(mesh, face_sizes, solved, conformal, area, flipped):
     mesh_io.write_attribute(mesh, AREA, "FACE", "FLOAT", a)
     mesh_io.write_attribute(mesh, FLIPPED, "FACE", "BOOLEAN", f)
     for kind, values in (("conformal", c), ("area", a)):
-        rgba = np.repeat(heat_colors(values), face_sizes, axis=0)
-        mesh_io.write_attribute(mesh, COLOR[kind], "CORNER", "BYTE_COLOR", rgba)
+        rgba = np.repeat(_linear_heat_colors(values), face_sizes, axis=0)
+        mesh_io.write_attribute(mesh, COLOR[kind], "CORNER", "FLOAT_COLOR", rgba)
 
 
 def snapshot(mesh):

@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 import bpy
 import numpy as np
 
-from . import aspect, distortion, mesh_io
+from . import aspect, distortion, mesh_io, proxy_pack
 
 
 # Summary of the last successful run (for batch scripts and tests).
@@ -74,8 +74,11 @@ class Summary:
     seams_marked: bool = False
     non_manifold_edges: int = 0  # edges of 3+ selected faces, treated as seams
     results: dict = field(default_factory=dict)  # object name -> uvflat.UnwrapResult
-    # Seconds per phase of the last run (for benchmarks): "read", "solve", "write", "pack"
-    # (Blender's packer alone) and "mode" (edit/object mode switches and selection changes).
+    # Seconds per phase of the last run (for benchmarks); they add up to ``seconds``:
+    # "read", "solve", "quality" (the core's measure of the per-face distortion), "write"
+    # (UVs, seams, distortion attributes), "pack" (Blender's packer; with the stand-in mesh
+    # of ``proxy_pack`` everything it does), "mode" (edit/object mode switches and selection
+    # changes around them) and "other" (the rest: summaries, bookkeeping).
     phases: dict = field(default_factory=dict)
 
     @property
@@ -220,7 +223,7 @@ def _read(obj) -> _Job:
     job.raw_selected = raw_selected
     job.seams = mesh_io.read_seams(mesh)
     # read here, on the main thread: the solve may run on a worker thread
-    job.triangles = mesh_io.read_loop_triangles(mesh)
+    job.triangles = mesh_io.read_loop_triangles(mesh, face_sizes)
     return job
 
 
@@ -295,7 +298,7 @@ def _solve(core, job: _Job, method, options, use_fit, progress=None):
     )
 
 
-def _write(job: _Job, core):
+def _write(job: _Job, core, phases=None):
     mesh = job.obj.data
     name, job.created_uv = mesh_io.ensure_uv_map(mesh)
     job.written = True  # from here on, _restore must undo this job
@@ -305,10 +308,13 @@ def _write(job: _Job, core):
     new_uv = job.old_uv.copy()
     solved = np.asarray(job.result.face_solved, dtype=bool) & job.selected
     corners = np.repeat(solved, job.face_sizes)
-    new_uv[corners] = np.asarray(job.result.uv)[corners]
+    np.copyto(new_uv, np.asarray(job.result.uv), where=corners[:, None])
     # per-face quality, measured independently of the solver in texture pixels (before the
     # aspect correction; packing moves islands by similarities only, which changes none of it)
+    t0 = time.perf_counter()
     quality = distortion.measure(core, job, new_uv, solved)
+    if phases is not None:
+        _lap(phases, "quality", t0)
     if job.aspect != 1.0:
         chart = np.asarray(job.result.chart, dtype=np.int64)
         free = solved.copy()
@@ -396,6 +402,8 @@ def _pack(context, jobs, in_mode, active, settings: PackSettings, only=None, pha
         pack_sets.append((job, faces, locked))
     if not any(faces.any() for _, faces, _ in pack_sets):
         return False
+    if _pack_by_proxy(context, pack_sets, settings, phases):
+        return False
     change = [(job, faces, locked) for job, faces, locked in pack_sets
               if locked.any() or not np.array_equal(faces, job.raw_selected)]
     tool_settings = context.scene.tool_settings
@@ -434,6 +442,31 @@ def _pack(context, jobs, in_mode, active, settings: PackSettings, only=None, pha
     _leave_edit_mode(in_mode)
     _restore_selection_and_pins(job for job, _, _ in change)
     return False
+
+
+def _pack_by_proxy(context, pack_sets, settings, phases) -> bool:
+    """Pack on a stand-in mesh of one face per island when that packs exactly as the meshes
+    themselves would (``proxy_pack``); the new UVs are written in object mode. Returns False,
+    having changed nothing, when it does not apply."""
+    t0 = time.perf_counter()
+    chosen = [(job, faces) for job, faces, _ in pack_sets if faces.any()]
+    n_islands = sum(len(np.unique(np.asarray(job.result.chart)[faces])) for job, faces in chosen)
+    locked = any(locked.any() for _, _, locked in pack_sets)
+    aspects = [aspect.image_aspect(context, job.obj) for job, _ in chosen]
+    n_faces = sum(len(job.face_sizes) for job, _, _ in pack_sets)
+    if not proxy_pack.applicable(settings, n_islands, locked, aspects, n_faces):
+        return False
+    uvs = {id(job): mesh_io.read_uv(job.obj.data, job.uv_name) for job, _ in chosen}
+    islands = proxy_pack.islands(chosen, uvs)
+    if islands is None:
+        return False
+    transforms = proxy_pack.pack(context, islands, settings, _enter_edit_mode, _leave_edit_mode)
+    proxy_pack.apply(islands, transforms, uvs)
+    for job, _ in chosen:
+        mesh_io.write_uv(job.obj.data, job.uv_name, uvs[id(job)])
+    if phases is not None:
+        _lap(phases, "pack", t0)
+    return True
 
 
 def _restore_selection_and_pins(jobs):
@@ -605,15 +638,16 @@ def _write_and_pack(context, run: Run) -> Summary:
     try:
         try:
             # 3. write (UVs, then the seams automatic seams cut)
-            t0 = time.perf_counter()
+            t0, quality = time.perf_counter(), phases.get("quality", 0.0)
             for job in jobs:
-                _write(job, run._core)
+                _write(job, run._core, phases)
                 if run.mark_seams:
                     summary.seams_added += _mark_new_seams(job)
                 else:
                     summary.seams_added += len(getattr(job.result, "new_seams", ()))
             summary.seams_marked = bool(run.mark_seams and summary.seams_added)
-            _lap(phases, "write", t0)
+            # the core's quality measure is its own phase
+            _lap(phases, "write", t0 + (phases.get("quality", 0.0) - quality))
             # 4. pack the new islands only. With packing off, islands without previous UVs
             # to keep them near (all area-scaled around the origin) are packed anyway, so
             # that they land inside the 0-1 tile without overlapping each other.
@@ -653,6 +687,8 @@ def _write_and_pack(context, run: Run) -> Summary:
                     summary.fallback.append(problem)
     summary.objects = len(jobs)
     summary.seconds = time.perf_counter() - run.start
+    phases.pop("other", None)
+    phases["other"] = max(0.0, summary.seconds - sum(phases.values()))
     return summary
 
 

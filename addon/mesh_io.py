@@ -6,6 +6,11 @@ whose dtype matches Blender's storage (float32 positions and UVs, int32 indices,
 never element by element.  All functions expect the mesh to be out of edit mode (the edit-mode
 BMesh is the live copy there); ``engine.py`` takes care of the mode switches.
 
+Flags Blender stores as optional attributes (seams, selection, hidden faces: attributes in every
+supported Blender, 4.2 and later) are read from the attribute when it exists and are all False
+when it does not: the element-wise RNA properties (``edges.use_seam`` …) are never read, they
+cost a tenth of a second per million elements and only report the same False.
+
 Note: Blender re-creates the ``uv_layers`` collection when the mesh leaves or enters edit mode,
 so UV layers are always looked up by name here, never kept across mode switches.
 """
@@ -45,6 +50,13 @@ def _attribute(mesh, names, count, dtype, width=1, field="value"):
     return None
 
 
+def _flags(mesh, names, count):
+    """A boolean attribute of ``names`` as a ``(count,)`` mask; all False when Blender stores
+    none (it creates the attribute the first time a flag is set)."""
+    flags = _attribute(mesh, names, count, bool)
+    return np.zeros(count, dtype=bool) if flags is None else flags
+
+
 def read_topology(mesh):
     """Positions, corners and faces of ``mesh`` as flat arrays.
 
@@ -67,13 +79,16 @@ def read_topology(mesh):
     return positions, corner_verts, face_sizes
 
 
-def read_loop_triangles(mesh):
+def read_loop_triangles(mesh, face_sizes=None):
     """The triangles Blender renders, bakes and exports: ``(T, 3) int64`` corner indices.
 
-    Calls ``mesh.calc_loop_triangles()`` (cheap when they are up to date) and copies
+    When ``face_sizes`` says every face is a triangle they are the faces' own corners in
+    order (Blender's loop triangle of a triangle), so nothing is read. Otherwise calls ``mesh.calc_loop_triangles()`` (cheap when they are up to date) and copies
     ``loop_triangles``' ``loops`` in one ``foreach_get``. The core splits n-gons the same way
     and keeps quads convex on both diagonals, so what it promises is what Blender shows.
     """
+    if face_sizes is not None and len(face_sizes) and bool(np.all(face_sizes == 3)):
+        return np.arange(3 * len(face_sizes), dtype=np.int64).reshape(-1, 3)
     mesh.calc_loop_triangles()
     tris = mesh.loop_triangles
     return _get(tris, "loops", len(tris), np.int32, 3).astype(np.int64)
@@ -85,10 +100,7 @@ def read_edges(mesh):
     edge_verts = _attribute(mesh, (".edge_verts",), n_e, np.int32, 2)
     if edge_verts is None:
         edge_verts = _get(mesh.edges, "vertices", n_e, np.int32, 2)
-    use_seam = _attribute(mesh, ("uv_seam", ".uv_seam"), n_e, bool)
-    if use_seam is None:
-        # No seam layer stored: either no seams at all, or a Blender that keeps them elsewhere.
-        use_seam = _get(mesh.edges, "use_seam", n_e, bool)
+    use_seam = _flags(mesh, ("uv_seam", ".uv_seam"), n_e)
     return edge_verts, use_seam
 
 
@@ -100,11 +112,17 @@ def read_seams(mesh):
 
 def read_vertex_selection(mesh):
     """Selected vertices as a ``(V,)`` bool mask."""
-    n_v = len(mesh.vertices)
-    selected = _attribute(mesh, (".select_vert",), n_v, bool)
-    if selected is None:
-        selected = _get(mesh.vertices, "select", n_v, bool)
-    return selected
+    return _flags(mesh, (".select_vert",), len(mesh.vertices))
+
+
+def read_corner_edges(mesh):
+    """Edge of every corner (the edge from the corner's vertex to the next corner's), ``(C,)``
+    int32."""
+    n_c = len(mesh.loops)
+    corner_edges = _attribute(mesh, (".corner_edge",), n_c, np.int32)
+    if corner_edges is None:
+        corner_edges = _get(mesh.loops, "edge_index", n_c, np.int32)
+    return corner_edges
 
 
 def seam_mask_of_pairs(mesh, pairs):
@@ -124,25 +142,15 @@ def seam_mask_of_pairs(mesh, pairs):
 
 def read_face_selection(mesh, *, include_hidden=False):
     """Selected faces as an ``(F,)`` bool mask; hidden faces are left out unless asked."""
-    n_f = len(mesh.polygons)
-    selected = _attribute(mesh, (".select_poly",), n_f, bool)
-    if selected is None:
-        selected = _get(mesh.polygons, "select", n_f, bool)
+    selected = _flags(mesh, (".select_poly",), len(mesh.polygons))
     if not include_hidden:
-        hidden = _attribute(mesh, (".hide_poly",), n_f, bool)
-        if hidden is None:
-            hidden = _get(mesh.polygons, "hide", n_f, bool)
-        selected &= ~hidden
+        selected &= ~read_hidden_faces(mesh)
     return selected
 
 
 def read_hidden_faces(mesh):
     """Hidden faces as an ``(F,)`` bool mask."""
-    n_f = len(mesh.polygons)
-    hidden = _attribute(mesh, (".hide_poly",), n_f, bool)
-    if hidden is None:
-        hidden = _get(mesh.polygons, "hide", n_f, bool)
-    return hidden
+    return _flags(mesh, (".hide_poly",), len(mesh.polygons))
 
 
 def uv_map_names(mesh):
@@ -312,8 +320,20 @@ def restore_attribute(mesh, name, saved):
 
 
 def write_seams(mesh, use_seam):
-    """Set every edge's seam flag from an ``(E,)`` bool mask."""
-    mesh.edges.foreach_set("use_seam", np.ascontiguousarray(use_seam, dtype=bool))
+    """Set every edge's seam flag from an ``(E,)`` bool mask: one copy into the seam
+    attribute when the mesh has one (its name depends on Blender's version), else through
+    ``edges.use_seam``, which creates it."""
+    use_seam = np.ascontiguousarray(use_seam, dtype=bool)
+    for name in ("uv_seam", ".uv_seam"):
+        attr = mesh.attributes.get(name)
+        if attr is not None and attr.data_type == "BOOLEAN" and attr.domain == "EDGE":
+            if len(attr.data) != len(use_seam):
+                raise ValueError(f"mesh '{mesh.name}': {len(use_seam)} seam flags for "
+                                 f"{len(attr.data)} edges")
+            attr.data.foreach_set("value", use_seam)
+            break
+    else:
+        mesh.edges.foreach_set("use_seam", use_seam)
     mesh.update()
 
 
@@ -351,8 +371,7 @@ def select_faces(mesh, faces):
     edge_verts, _ = read_edges(mesh)
     edges = np.zeros(len(mesh.edges), dtype=bool)
     if len(mesh.loops):
-        corner_edges = _get(mesh.loops, "edge_index", len(mesh.loops), np.int32)
-        edges[corner_edges[corner_in]] = True
+        edges[read_corner_edges(mesh)[corner_in]] = True
     # Written through the attributes: on a mesh that never had a selection, Blender 5.0.1
     # crashes in ``edges.foreach_set("select", ...)`` (the attribute does not exist yet).
     _set_bool_attribute(mesh, ".select_vert", "POINT", verts)

@@ -3,7 +3,10 @@
 
 An unwrap expected to take longer than ``engine.MODAL_AFTER_SECONDS`` runs the core on a
 worker thread while the operator runs modal: progress in the status bar, Esc cancels and
-leaves every UV map, seam and selection exactly as before. Without a window (background
+leaves every UV map, seam and selection exactly as before. The meshes stay out of edit mode
+while the core solves (the viewport shows object mode): going back to edit mode only to leave
+it again when the solve ends would rebuild every edit mesh twice for nothing (half a second
+per million faces). Without a window (background
 mode) or for small selections it runs in one go.
 """
 
@@ -77,7 +80,7 @@ class UV_OT_uvflat_unwrap(bpy.types.Operator):
                          auto_seams=methods.auto_seam_options(self), mark_seams=self.mark_seams,
                          avoid_group=self.avoid_group)
         try:
-            run.prepare(context)
+            run.prepare(context, stay_out=True)
         except engine.UnwrapError as ex:
             self.report({"ERROR"}, f"uvflat: {ex}")
             return {"CANCELLED"}

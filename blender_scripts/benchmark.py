@@ -18,12 +18,16 @@ area-weighted conformal / area / symmetric Dirichlet distortions (1 is perfect).
 
 Cases besides the files: ``camelhead_smart`` (camelhead cut by Blender's Smart UV Project,
 seams marked from its islands: 128 charts, the many-charts case) and, with
-``--large`` only (slow), ``disk_840k``: a flat disk of 128 triangles subdivided with 80 cuts,
-839,808 triangles in one chart.
+``--large`` or when named (slow), ``disk_840k``: a flat disk of 128 triangles subdivided with
+80 cuts, 839,808 triangles in one chart, and ``disk_300k``: the same with 47 cuts, 294,912
+triangles. ``--blender-methods none`` leaves Blender's own unwraps out (they take long on
+the large disks).
 
 ``--phases`` adds, for uvflat rows, the median seconds of each phase of the add-on's operator
-(read, solve, write, pack = Blender's packer alone, mode = edit/object mode switches), taken from
-the engine's ``Summary.phases``.  ``peak MB`` is the process's peak resident memory so far
+(read, solve, quality = the core's per-face distortion measure, write, pack = the packing,
+mode = edit/object mode switches, other = the rest of the operator call), taken from the
+engine's ``Summary.phases``; "other" also holds the operator call's own overhead, so the
+phases add up to the ``seconds`` column (of the same run; medians may not add up exactly).  ``peak MB`` is the process's peak resident memory so far
 (``resource.getrusage``; it only grows, so read it in run order), ``threads`` the size of the
 core's thread pool (``--threads N`` sets ``RAYON_NUM_THREADS`` before the core is loaded).
 
@@ -73,6 +77,8 @@ def factorization_seconds(uvflat, positions, corner_verts, face_sizes, method, s
 
 SMART_MESH = "camelhead"  # the shared mesh cut by Smart UV Project for the many-charts case
 LARGE_DISK = "disk_840k"
+# the large disks: name -> subdivision cuts of the 128-triangle fan
+LARGE_DISKS = {LARGE_DISK: 80, "disk_300k": 47}
 
 
 def mesh_list(names, large=False):
@@ -86,8 +92,9 @@ def mesh_list(names, large=False):
             available[f"{SMART_MESH}_smart"] = smart
     else:
         print(f"note: {common.SHARED_MESHES} not found; only Blender's primitives are measured")
-    if large or LARGE_DISK in names:
-        available[LARGE_DISK] = None
+    for disk in LARGE_DISKS:
+        if large or disk in names:
+            available[disk] = None
     if names:
         missing = [n for n in names if n not in available]
         if missing:
@@ -106,12 +113,12 @@ def smart_cut(obj):
     return obj
 
 
-def large_disk(segments=128, cuts=80):
+def large_disk(segments=128, cuts=80, name=LARGE_DISK):
     """A flat disk: a triangle fan of ``segments`` triangles, every triangle split by ``cuts``
     cuts per edge into (cuts + 1)² triangles (839,808 with the defaults)."""
     bpy.ops.mesh.primitive_circle_add(vertices=segments, fill_type="TRIFAN")
     obj = bpy.context.active_object
-    obj.name = LARGE_DISK
+    obj.name = name
     common.edit_mode([obj])
     bpy.ops.mesh.select_all(action="SELECT")
     bpy.ops.mesh.subdivide(number_cuts=cuts)
@@ -122,8 +129,8 @@ def large_disk(segments=128, cuts=80):
 def load(name, path):
     common.reset_scene()
     common.load_addon()
-    if name == LARGE_DISK:
-        return large_disk()
+    if name in LARGE_DISKS:
+        return large_disk(cuts=LARGE_DISKS[name], name=name)
     if path is None:
         return common.suzanne_subdivided(2) if name == "suzanne_subdiv2" else common.suzanne()
     obj = common.load_mesh_object(path)
@@ -176,7 +183,10 @@ def measure(uvflat, mesh_io, obj, kind, method, repeat):
         times.append(seconds)
         if kind == "uvflat":
             summary = sys.modules[common.ADDON_MODULE].engine.LAST_SUMMARY
-            phases.append(dict(getattr(summary, "phases", None) or {}))
+            ph = dict(getattr(summary, "phases", None) or {})
+            # the operator call's own overhead (outside the engine's run) is "other" too
+            ph["other"] = ph.get("other", 0.0) + max(0.0, seconds - sum(ph.values()))
+            phases.append(ph)
     row = {"kind": kind, "method": method, "error": error,
            "seconds": statistics.median(times) if times else None, "peak_mb": peak_mb()}
     if phases:
@@ -204,7 +214,7 @@ def measure(uvflat, mesh_io, obj, kind, method, repeat):
     return row
 
 
-PHASES = ("read", "solve", "write", "pack", "mode")
+PHASES = ("read", "solve", "quality", "write", "pack", "mode", "other")
 
 
 def fmt(value, spec):
@@ -251,16 +261,18 @@ def main(argv=None):
     parser.add_argument("--meshes", default="", help="comma-separated mesh names (default: all)")
     parser.add_argument("--methods", default="", help="comma-separated uvflat methods (default: all)")
     parser.add_argument("--blender-methods", default=",".join(BLENDER_METHODS),
-                        help="comma-separated Blender unwrap methods")
+                        help="comma-separated Blender unwrap methods, or 'none'")
     parser.add_argument("--repeat", type=int, default=3, help="repetitions (median reported)")
     parser.add_argument("--out", type=Path, default=None, help="write the markdown table here")
     parser.add_argument("--closed", action="store_true",
                         help="the closed-mesh table instead: automatic seams against Smart UV "
                              "Project + ANGLE_BASED and xatlas (see closed_benchmark.py)")
     parser.add_argument("--phases", action="store_true",
-                        help="per-phase seconds of the add-on's operator (read, solve, write, pack, mode)")
+                        help="per-phase seconds of the add-on's operator (read, solve, quality, "
+                             "write, pack, mode, other)")
     parser.add_argument("--large", action="store_true",
-                        help=f"also the slow large case {LARGE_DISK} (a disk of 839,808 triangles)")
+                        help="also the slow large cases disk_840k and disk_300k (disks of "
+                             "839,808 and 294,912 triangles)")
     parser.add_argument("--threads", type=int, default=0,
                         help="threads of the core's pool (RAYON_NUM_THREADS; default: all cores)")
     args = parser.parse_args(argv)
@@ -293,7 +305,11 @@ def main(argv=None):
     unknown = [m for m in methods if m not in known]
     if unknown:
         raise SystemExit(f"unknown uvflat method(s) {unknown}; available: {', '.join(known)}")
-    blender_methods = [m for m in args.blender_methods.split(",") if m]
+    blender_methods = [m for m in args.blender_methods.split(",") if m and m.lower() != "none"]
+    unknown = [m for m in blender_methods if m not in BLENDER_METHODS]
+    if unknown:
+        raise SystemExit(f"unknown Blender method(s) {unknown}; available: "
+                         f"{', '.join(BLENDER_METHODS)} or none")
     meshes = mesh_list([n for n in args.meshes.split(",") if n], large=args.large)
 
     results = []

@@ -1,0 +1,220 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""Pack islands with Blender's packer run on a small stand-in mesh: one face per island.
+
+Blender's ``uv.pack_islands`` costs time per face of the mesh it runs on (about 1.5 s for a
+single island of 840k triangles, whatever its settings), and it needs the mesh in edit mode,
+which is another BMesh build of the whole mesh. Its result is one similarity per island
+(uniform scale, rotation, translation), chosen from each island's shape only:
+
+* ``AABB``: the island's bounding box, or with rotation the smallest box of any angle, which
+  is the smallest box of its convex hull;
+* ``CONVEX``: its convex hull;
+* ``CONCAVE`` (exact shape): for a single island with nothing to pack around there is no
+  other shape to fit against, and the result is the one of its convex hull.
+
+So in those cases Blender's packer, run on a temporary mesh holding one convex polygon per
+island (the island's convex hull, same UVs), chooses the same similarities; they are read
+back from two hull vertices and applied to every corner of the real island. The real meshes
+are never put in edit mode for it and their selection and pins are never touched.
+
+The hull of an island is the hull of its boundary corners: the corners on edges used by one
+packed face only, on seams (marked, or cut by automatic seams) and on non-manifold edges.
+
+:func:`islands` returns ``None`` where this does not hold (islands packed around locked ones,
+a non-square texture aspect, several islands with the exact shape, degenerate islands, very
+many islands) and the caller runs Blender's packer on the meshes themselves.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import mesh_io
+
+# Above this many islands the per-island hulls (a Python loop) would cost more than they save.
+MAX_ISLANDS = 2000
+# Below this many faces in the meshes Blender's packer on the meshes themselves is as quick
+# (building the stand-in costs some 30 ms).
+MIN_FACES = 20000
+PROXY_NAME = "uvflat pack proxy"
+
+
+@dataclass
+class Island:
+    """One island to pack: whose corners, and its convex hull in UV (counter-clockwise)."""
+
+    job: object
+    corners: np.ndarray   # (K,) corner indices of the island in its mesh
+    hull: np.ndarray      # (H,2) float64, H >= 3, positive area
+
+
+def applicable(settings, n_islands: int, locked: bool, aspects, n_faces: int) -> bool:
+    """Whether the stand-in mesh packs exactly like the meshes themselves (module doc) and
+    is worth building (meshes of ``n_faces`` >= :data:`MIN_FACES` faces in all)."""
+    if locked or any(a != 1.0 for a in aspects) or n_islands == 0 or n_islands > MAX_ISLANDS:
+        return False
+    if n_faces < MIN_FACES:
+        return False
+    return settings.shape_method in ("AABB", "CONVEX") or n_islands == 1
+
+
+def _boundary_corners(mesh, face_sizes, corner_in, seam_pairs):
+    """``(C,)`` mask of the packed corners on an island boundary (see the module doc)."""
+    corner_edges = mesh_io.read_corner_edges(mesh)
+    _, use_seam = mesh_io.read_edges(mesh)
+    uses = np.bincount(corner_edges[corner_in], minlength=len(use_seam))
+    boundary = (uses != 2) | use_seam
+    if len(seam_pairs):
+        boundary |= mesh_io.seam_mask_of_pairs(mesh, seam_pairs)
+    on_edge = corner_in & boundary[corner_edges]
+    # the edge of corner c ends at the next corner of its face: both are on the boundary
+    starts = np.zeros(len(face_sizes), dtype=np.int64)
+    np.cumsum(face_sizes[:-1], out=starts[1:])
+    following = np.arange(len(corner_edges)) + 1
+    following[starts + face_sizes - 1] = starts
+    out = on_edge.copy()
+    out[following[on_edge]] = True
+    return out
+
+
+def _hull(points):
+    """Counter-clockwise convex hull of ``points`` ((N,2)), or ``None`` if it has no area."""
+    from mathutils.geometry import convex_hull_2d
+
+    if len(points) < 3:
+        return None
+    hull = points[np.asarray(convex_hull_2d(points.tolist()), dtype=np.int64)]
+    if len(hull) < 3:
+        return None
+    x, y = hull[:, 0], hull[:, 1]
+    area = 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+    if not area > 0.0:
+        if area < 0.0:
+            return hull[::-1].copy()
+        return None
+    return hull
+
+
+def _grouped(corners, corner_chart, ids):
+    """``corners`` ordered by island (``ids``: the sorted chart ids) and where each island's
+    run starts; a counting sort (island numbers fit 16 bits, :data:`MAX_ISLANDS`)."""
+    if len(ids) == 1:
+        return corners, np.zeros(1, dtype=np.int64)
+    island = np.searchsorted(ids, corner_chart[corners]).astype(np.int16)
+    order = np.argsort(island, kind="stable")
+    return corners[order], np.searchsorted(island[order], np.arange(len(ids)))
+
+
+def islands(jobs_faces, uvs):
+    """The islands of ``jobs_faces`` (pairs ``(job, packed faces mask)``) with their hulls,
+    from the UVs in ``uvs`` (job id -> (C,2) float32 as written); ``None`` if any island is
+    degenerate or there are more than :data:`MAX_ISLANDS`."""
+    out = []
+    for job, faces in jobs_faces:
+        if not faces.any():
+            continue
+        face_sizes = job.face_sizes.astype(np.int64)
+        chart = np.asarray(job.result.chart, dtype=np.int64)
+        ids = np.unique(chart[faces])
+        if len(out) + len(ids) > MAX_ISLANDS:
+            return None
+        corner_in = np.repeat(faces, face_sizes)
+        corner_chart = np.repeat(chart, face_sizes)
+        seams = np.asarray(getattr(job.result, "new_seams", ()), dtype=np.int64).reshape(-1, 2)
+        edge = _boundary_corners(job.obj.data, face_sizes, corner_in, seams)
+        uv = uvs[id(job)].astype(np.float64)
+        members, cut = _grouped(np.flatnonzero(corner_in), corner_chart, ids)
+        on_edge, edge_cut = _grouped(np.flatnonzero(edge), corner_chart, ids)
+        for k in range(len(ids)):
+            end = cut[k + 1] if k + 1 < len(ids) else len(members)
+            edge_end = edge_cut[k + 1] if k + 1 < len(ids) else len(on_edge)
+            points = np.unique(uv[on_edge[edge_cut[k]:edge_end]], axis=0)
+            hull = _hull(points)
+            if hull is None:
+                return None
+            out.append(Island(job, members[cut[k]:end], hull))
+    return out
+
+
+def pack(context, islands_, settings, enter_edit_mode, leave_edit_mode):
+    """Pack ``islands_`` with Blender's packer on a temporary mesh; returns one ``(a, b)``
+    per island, complex numbers of the similarity ``z -> a z + b`` (``z = u + i v``).
+
+    ``enter_edit_mode(view_layer, objects, active)`` / ``leave_edit_mode(objects)``: the
+    engine's mode switches. The temporary object and mesh are removed in every case."""
+    import bpy
+
+    sizes = np.array([len(isl.hull) for isl in islands_], dtype=np.int64)
+    points = np.concatenate([isl.hull for isl in islands_])
+    positions = np.column_stack([points, np.zeros(len(points))])
+    corners = np.arange(len(points), dtype=np.int32)
+    mesh = mesh_io.new_mesh(PROXY_NAME, positions, corners, sizes)
+    obj = None
+    try:
+        if len(mesh.polygons) != len(islands_) or len(mesh.loops) != len(points):
+            raise RuntimeError("the packing stand-in mesh could not be built")
+        name, _ = mesh_io.ensure_uv_map(mesh)
+        mesh_io.write_uv(mesh, name, points)
+        mesh_io.select_all_faces(mesh)
+        obj = bpy.data.objects.new(PROXY_NAME, mesh)
+        context.scene.collection.objects.link(obj)
+        view_layer = context.view_layer
+        tool_settings = context.scene.tool_settings
+        sync = tool_settings.use_uv_select_sync
+        select_mode = tuple(tool_settings.mesh_select_mode)
+        tool_settings.mesh_select_mode = (False, False, True)
+        try:
+            enter_edit_mode(view_layer, [obj], obj)
+            try:
+                tool_settings.use_uv_select_sync = True
+                result = bpy.ops.uv.pack_islands(
+                    margin=settings.margin, margin_method=settings.margin_method,
+                    shape_method=settings.shape_method, rotate=settings.rotate, pin=False)
+            finally:
+                tool_settings.use_uv_select_sync = sync
+                leave_edit_mode([obj])
+        finally:
+            tool_settings.mesh_select_mode = select_mode
+        if "FINISHED" not in result:
+            raise RuntimeError(f"Blender's island packing returned {set(result)}")
+        packed = mesh_io.read_uv(obj.data, name).astype(np.float64)
+    finally:
+        if obj is not None:
+            context.scene.collection.objects.unlink(obj)
+            bpy.data.objects.remove(obj)
+            context.view_layer.update()  # drop the removed object's base from the view layer
+        bpy.data.meshes.remove(mesh)
+    transforms = []
+    start = 0
+    for isl, n in zip(islands_, sizes):
+        before = isl.hull[:, 0] + 1j * isl.hull[:, 1]
+        after = packed[start:start + n, 0] + 1j * packed[start:start + n, 1]
+        start += n
+        far = int(np.argmax(np.abs(before - before[0])))
+        a = (after[far] - after[0]) / (before[far] - before[0])
+        transforms.append((a, after[0] - a * before[0]))
+    return transforms
+
+
+def apply(islands_, transforms, uvs):
+    """Move every island's corners in ``uvs`` (job id -> (C,2) float32, changed in place),
+    all islands of a mesh in one vectorised step (in float64)."""
+    per_job = {}
+    for isl, (a, b) in zip(islands_, transforms):
+        per_job.setdefault(id(isl.job), []).append((isl.corners, a, b))
+    for key, parts in per_job.items():
+        uv = uvs[key]
+        if len(parts) == 1 and len(parts[0][0]) == len(uv):
+            corners = slice(None)
+            a, b = parts[0][1], parts[0][2]
+        else:
+            corners = np.concatenate([p[0] for p in parts])
+            counts = [len(p[0]) for p in parts]
+            a = np.repeat(np.array([p[1] for p in parts]), counts)
+            b = np.repeat(np.array([p[2] for p in parts]), counts)
+        u = uv[corners, 0].astype(np.float64)
+        v = uv[corners, 1].astype(np.float64)
+        uv[corners, 0] = a.real * u - a.imag * v + b.real
+        uv[corners, 1] = a.imag * u + a.real * v + b.imag
