@@ -32,10 +32,14 @@
 
 use rayon::prelude::*;
 
+use super::nonlinear::iterate::{stopped_early_note, Change, Iteration};
 use super::{chart_angles, lscm, ChartFailure, ChartSolution};
 use crate::charts::Chart;
-use crate::geometry::{clamped_angles, norm, sub};
 use crate::solvers::{FixedValueSolver, Symmetry};
+
+pub use super::nonlinear::energy::arap_energy;
+pub use super::nonlinear::proxy::closest_rotation;
+pub use super::nonlinear::TriangleOperators;
 
 /// Options of the ARAP method.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -49,121 +53,6 @@ pub struct ArapOptions {
 impl Default for ArapOptions {
     fn default() -> Self {
         ArapOptions { max_iterations: 100, tolerance: 1e-6 }
-    }
-}
-
-/// Per-triangle gradient operators of a chart's reference (3D) triangles, shared by the
-/// nonlinear methods (ARAP, SLIM).
-///
-/// Each triangle is laid out in its own 2D frame from its clamped corner angles
-/// ([`clamped_angles`]) and its longest 3D edge (law of sines), so the frame is exact for
-/// ordinary triangles and thin but valid for degenerate ones; `area` is the area of that frame
-/// triangle. The Jacobian of a UV map on triangle f is `J[k][j] = Σ_i grad[f][j][i] · x_k(t_i)`
-/// (row k = u or v, column j = x or y of the frame).
-#[derive(Debug, Clone)]
-pub struct TriangleOperators {
-    /// `grad[f][j][i]`: derivative along frame axis j of the hat function of corner i.
-    pub grad: Vec<[[f64; 3]; 2]>,
-    /// Area of every reference triangle (> 0).
-    pub area: Vec<f64>,
-    /// Sum of `area`.
-    pub total_area: f64,
-}
-
-impl TriangleOperators {
-    /// Build the operators of `triangles` over `positions`. Never fails: a triangle whose
-    /// corners coincide gets an equilateral shape with the chart's mean edge length.
-    pub fn new(positions: &[[f64; 3]], triangles: &[[u32; 3]]) -> Self {
-        let edge = |t: &[u32; 3], k: usize| norm(sub(positions[t[(k + 1) % 3] as usize], positions[t[k] as usize]));
-        let (sum, count) = triangles.iter().fold((0.0, 0usize), |(s, c), t| (s + edge(t, 0) + edge(t, 1) + edge(t, 2), c + 3));
-        let mean_edge = if count > 0 && sum > 0.0 { sum / count as f64 } else { 1.0 };
-        let (grad, area): (Vec<[[f64; 3]; 2]>, Vec<f64>) = triangles
-            .par_iter()
-            .map(|t| {
-                let p = [positions[t[0] as usize], positions[t[1] as usize], positions[t[2] as usize]];
-                let a = clamped_angles(p);
-                let longest = edge(t, 0).max(edge(t, 1)).max(edge(t, 2));
-                let longest = if longest > 0.0 { longest } else { mean_edge };
-                // Side opposite corner k is proportional to sin a_k.
-                let s = longest / a[0].sin().max(a[1].sin()).max(a[2].sin());
-                let (l01, l02) = (s * a[2].sin(), s * a[1].sin());
-                let (x1, x2, y2) = (l01, l02 * a[0].cos(), l02 * a[0].sin());
-                let det = x1 * y2;
-                let g = [[-1.0 / x1, 1.0 / x1, 0.0], [(x2 - x1) / det, -x2 / det, x1 / det]];
-                (g, 0.5 * det)
-            })
-            .unzip();
-        let total_area = area.iter().sum();
-        TriangleOperators { grad, area, total_area }
-    }
-
-    /// Jacobian `[[∂u/∂x, ∂u/∂y], [∂v/∂x, ∂v/∂y]]` of triangle `f` (vertices `t`) under `uv`.
-    #[inline]
-    pub fn jacobian(&self, f: usize, t: &[u32; 3], uv: &[[f64; 2]]) -> [[f64; 2]; 2] {
-        let g = &self.grad[f];
-        let mut j = [[0.0; 2]; 2];
-        for i in 0..3 {
-            let x = uv[t[i] as usize];
-            for k in 0..2 {
-                j[k][0] += g[0][i] * x[k];
-                j[k][1] += g[1][i] * x[k];
-            }
-        }
-        j
-    }
-
-    /// Per-triangle stiffness `Σ_j grad[j][a]·grad[j][b]` (the cotangent Laplacian of the
-    /// triangle divided by its area), row-major 3 × 3.
-    #[inline]
-    pub fn stiffness(&self, f: usize) -> [[f64; 3]; 3] {
-        let g = &self.grad[f];
-        let mut l = [[0.0; 3]; 3];
-        for a in 0..3 {
-            for b in 0..3 {
-                l[a][b] = g[0][a] * g[0][b] + g[1][a] * g[1][b];
-            }
-        }
-        l
-    }
-}
-
-/// The rotation closest to `j` in the Frobenius norm (det +1), as `(cos θ, sin θ)`.
-#[inline]
-pub fn closest_rotation(j: [[f64; 2]; 2]) -> (f64, f64) {
-    let (c, s) = (j[0][0] + j[1][1], j[1][0] - j[0][1]);
-    let r = c.hypot(s);
-    if r > 0.0 {
-        (c / r, s / r)
-    } else {
-        (1.0, 0.0)
-    }
-}
-
-/// ARAP energy `Σ A_f ‖J_f − R_f‖²` (with the closest rotations) divided by the total area.
-pub fn arap_energy(ops: &TriangleOperators, triangles: &[[u32; 3]], uv: &[[f64; 2]]) -> f64 {
-    let e: f64 = triangles
-        .par_iter()
-        .enumerate()
-        .with_min_len(2048)
-        .map(|(f, t)| {
-            let j = ops.jacobian(f, t, uv);
-            let fro = j[0][0] * j[0][0] + j[0][1] * j[0][1] + j[1][0] * j[1][0] + j[1][1] * j[1][1];
-            let trace_rt_j = (j[0][0] + j[1][1]).hypot(j[1][0] - j[0][1]);
-            ops.area[f] * (fro - 2.0 * trace_rt_j + 2.0).max(0.0)
-        })
-        .sum();
-    e / ops.total_area
-}
-
-/// The vertices held fixed by a global step and their UVs: all pins when they span more than
-/// a point, else the first pin (or vertex 0 without pins) at its current UV.
-pub(crate) fn anchors(pins: &[(u32, [f64; 2])], uv: &[[f64; 2]]) -> Vec<(u32, [f64; 2])> {
-    if lscm::pins_span(pins) {
-        pins.to_vec()
-    } else if let Some(&(v, _)) = pins.first() {
-        vec![(v, uv[v as usize])]
-    } else {
-        vec![(0, uv[0])]
     }
 }
 
@@ -196,17 +85,14 @@ pub fn solve_with_history(
             }
         }
     }
-    let fixed = anchors(pins, &uv);
+    let fixed = super::nonlinear::pins::anchors(pins, &uv);
     let fixed_ids: Vec<u32> = fixed.iter().map(|p| p.0).collect();
     let fixed_vals = [fixed.iter().map(|p| p.1[0]).collect::<Vec<f64>>(), fixed.iter().map(|p| p.1[1]).collect::<Vec<f64>>()];
     let solver = FixedValueSolver::new(n, &trip, &fixed_ids, Symmetry::Symmetric)?;
 
-    let mut energy = arap_energy(&ops, tris, &uv);
-    let mut history = vec![energy];
-    let mut change = 0.0;
-    let mut iterations = 0;
+    let mut it = Iteration::new(arap_energy(&ops, tris, &uv), options.max_iterations, options.tolerance, Change::OfPrevious, 0.0);
     let mut stopped = None;
-    while iterations < options.max_iterations && energy > 1e-15 && !crate::progress::cancelled() {
+    while it.go_on() && it.energy() > 1e-15 {
         // Local step: closest rotations; right-hand side Σ A_f R_f D_f per vertex.
         let contrib: Vec<[[f64; 2]; 3]> = tris
             .par_iter()
@@ -243,18 +129,15 @@ pub fn solve_with_history(
             }
         };
         uv = (0..n).map(|i| [x[0][i], x[1][i]]).collect();
-        iterations += 1;
-        let e = arap_energy(&ops, tris, &uv);
-        history.push(e);
-        change = (energy - e).abs() / energy.max(f64::MIN_POSITIVE);
-        energy = e;
-        if change < options.tolerance {
+        if it.record(arap_energy(&ops, tris, &uv)) {
             break;
         }
     }
+    let (energy, iterations, change) = (it.energy(), it.iterations, it.change);
+    let history = it.history;
     let mut note = format!("ARAP energy {energy:.6e} per unit area after {iterations} iteration(s)");
     if let Some(reason) = stopped {
-        note = format!("{note}; stopped early, the global step failed: {reason}");
+        note = format!("{note}; {}", stopped_early_note(&reason));
     }
     if let Some(p) = pin_note {
         note = format!("{note}; {p}");

@@ -39,13 +39,21 @@
 //! Newton system becomes a chart failure. A start with a degenerate UV triangle (infinite
 //! energy) returns the mean value map as a fallback.
 
-use super::fixed_boundary::{self, Weights};
-use super::{BoundaryShape, ChartFailure, ChartSolution, Fallback};
+use super::nonlinear::hessian::{mips_derivatives, project_psd4};
+use super::nonlinear::iterate::{quads_left_out_note, Change, Iteration};
+use super::nonlinear::jacobian::flat;
+use super::nonlinear::pattern::{block_triplets, by_component, BLOCK};
+use super::nonlinear::pins::gauge_vertices;
+use super::nonlinear::TriangleOperators;
+use super::{ChartFailure, ChartSolution, Fallback};
 use crate::charts::Chart;
-use crate::geometry::{local_frame, triangle_area};
 use crate::solvers::line_search::{all_positive, flip_free_line_search, LineSearchOptions};
 use crate::solvers::{FixedValueSolver, SolveError, Symmetry};
 use rayon::prelude::*;
+
+pub use super::nonlinear::energy::{mips_density, mips_energy};
+pub(crate) use super::nonlinear::pins::honour_pins_by_similarity;
+pub(crate) use super::nonlinear::start::flip_free_start;
 
 /// Options of [`solve`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -62,259 +70,6 @@ impl Default for MipsOptions {
     }
 }
 
-/// Per-triangle rest data: the gradient operator of the piecewise linear map in the
-/// triangle's local 2D frame, and its 3D area.
-#[derive(Debug, Clone, Copy)]
-pub struct RestTriangle {
-    /// `g[c][k]`: weight of vertex k's value in the partial derivative along local axis c, so
-    /// J[r][c] = Σ_k g[c][k] x_k[r] (r = 0 for u, 1 for v).
-    pub g: [[f64; 3]; 2],
-    /// Area of the rest triangle (0 for a degenerate one, which then carries no energy).
-    pub area: f64,
-}
-
-impl RestTriangle {
-    /// Rest data of a 2D triangle `q` (counter-clockwise for a positive area).
-    pub fn from_2d(q: [[f64; 2]; 3]) -> RestTriangle {
-        let (e1, e2) = ([q[1][0] - q[0][0], q[1][1] - q[0][1]], [q[2][0] - q[0][0], q[2][1] - q[0][1]]);
-        let det = e1[0] * e2[1] - e1[1] * e2[0];
-        if !(det.abs() > 0.0) || !det.is_finite() {
-            return RestTriangle { g: [[0.0; 3]; 2], area: 0.0 };
-        }
-        // R = [e1 e2] (columns); J = U R⁻¹ with U = [x1 − x0, x2 − x0].
-        let inv = [[e2[1] / det, -e2[0] / det], [-e1[1] / det, e1[0] / det]];
-        let mut g = [[0.0; 3]; 2];
-        for c in 0..2 {
-            g[c] = [-(inv[0][c] + inv[1][c]), inv[0][c], inv[1][c]];
-        }
-        RestTriangle { g, area: 0.5 * det.abs() }
-    }
-
-    /// Rest data of a 3D triangle, laid out in its local frame.
-    pub fn from_3d(p: [[f64; 3]; 3]) -> RestTriangle {
-        let mut r = RestTriangle::from_2d(local_frame(p));
-        r.area = if r.area > 0.0 { triangle_area(p) } else { 0.0 };
-        r
-    }
-
-    /// Jacobian entries (J00, J01, J10, J11) of the UV triangle `x`.
-    #[inline]
-    pub fn jacobian(&self, x: [[f64; 2]; 3]) -> [f64; 4] {
-        let mut j = [0.0; 4];
-        for r in 0..2 {
-            for c in 0..2 {
-                j[2 * r + c] = (0..3).map(|k| self.g[c][k] * x[k][r]).sum();
-            }
-        }
-        j
-    }
-
-    /// Pull back a J-space gradient (length 4) to the six UV coordinates, ordered
-    /// (u0, u1, u2, v0, v1, v2).
-    #[inline]
-    pub fn pull_gradient(&self, gj: [f64; 4]) -> [f64; 6] {
-        let mut out = [0.0; 6];
-        for r in 0..2 {
-            for c in 0..2 {
-                for k in 0..3 {
-                    out[3 * r + k] += gj[2 * r + c] * self.g[c][k];
-                }
-            }
-        }
-        out
-    }
-
-    /// Row `m` (J entry) of the 4×6 map B from (u0, u1, u2, v0, v1, v2) to J.
-    #[inline]
-    fn b_row(&self, m: usize) -> [f64; 6] {
-        let (r, c) = (m / 2, m % 2);
-        let mut row = [0.0; 6];
-        for k in 0..3 {
-            row[3 * r + k] = self.g[c][k];
-        }
-        row
-    }
-
-    /// Bᵀ H B for a symmetric 4×4 J-space matrix H.
-    pub fn pull_hessian(&self, h: &[[f64; 4]; 4]) -> [[f64; 6]; 6] {
-        let b: [[f64; 6]; 4] = [self.b_row(0), self.b_row(1), self.b_row(2), self.b_row(3)];
-        let mut hb = [[0.0; 6]; 4];
-        for m in 0..4 {
-            for k in 0..6 {
-                hb[m][k] = (0..4).map(|l| h[m][l] * b[l][k]).sum();
-            }
-        }
-        let mut out = [[0.0; 6]; 6];
-        for i in 0..6 {
-            for k in 0..6 {
-                out[i][k] = (0..4).map(|m| b[m][i] * hb[m][k]).sum();
-            }
-        }
-        out
-    }
-}
-
-/// MIPS energy ‖J‖²/det J of one Jacobian (+∞ unless det J > 0).
-#[inline]
-pub fn mips_density(j: [f64; 4]) -> f64 {
-    let det = j[0] * j[3] - j[1] * j[2];
-    if det > 0.0 {
-        (j[0] * j[0] + j[1] * j[1] + j[2] * j[2] + j[3] * j[3]) / det
-    } else {
-        f64::INFINITY
-    }
-}
-
-/// Gradient and Hessian of ‖J‖²/det J with respect to (J00, J01, J10, J11), for det J > 0.
-fn mips_derivatives(j: [f64; 4]) -> ([f64; 4], [[f64; 4]; 4]) {
-    let n: f64 = j.iter().map(|x| x * x).sum();
-    let d = j[0] * j[3] - j[1] * j[2];
-    let g = [j[3], -j[2], -j[1], j[0]]; // ∇ det
-    let mut grad = [0.0; 4];
-    for k in 0..4 {
-        grad[k] = 2.0 * j[k] / d - n * g[k] / (d * d);
-    }
-    let mut h = [[0.0; 4]; 4];
-    for a in 0..4 {
-        for b in 0..4 {
-            let mut v = -2.0 * (j[a] * g[b] + g[a] * j[b]) / (d * d) + 2.0 * n * g[a] * g[b] / (d * d * d);
-            if a == b {
-                v += 2.0 / d;
-            }
-            h[a][b] = v;
-        }
-    }
-    // ∂² det: entries (0,3), (3,0) = 1; (1,2), (2,1) = −1.
-    let s = n / (d * d);
-    h[0][3] -= s;
-    h[3][0] -= s;
-    h[1][2] += s;
-    h[2][1] += s;
-    (grad, h)
-}
-
-/// Project a symmetric 4×4 matrix onto the positive semidefinite cone (cyclic Jacobi
-/// eigen-decomposition, negative eigenvalues set to zero).
-pub(crate) fn project_psd4(a: &[[f64; 4]; 4]) -> [[f64; 4]; 4] {
-    let mut m = *a;
-    let mut v = [[0.0; 4]; 4];
-    for i in 0..4 {
-        v[i][i] = 1.0;
-    }
-    let scale: f64 = m.iter().flatten().map(|x| x.abs()).fold(0.0, f64::max);
-    if !(scale > 0.0) || !scale.is_finite() {
-        return [[0.0; 4]; 4];
-    }
-    for _sweep in 0..30 {
-        let off: f64 = (0..4).flat_map(|p| (0..4).filter(move |&q| q != p).map(move |q| (p, q))).map(|(p, q)| m[p][q] * m[p][q]).sum();
-        if off <= 1e-30 * scale * scale {
-            break;
-        }
-        for p in 0..3 {
-            for q in p + 1..4 {
-                if m[p][q].abs() <= 1e-300 {
-                    continue;
-                }
-                let theta = (m[q][q] - m[p][p]) / (2.0 * m[p][q]);
-                let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
-                let t = if theta == 0.0 { 1.0 } else { t };
-                let c = 1.0 / (t * t + 1.0).sqrt();
-                let s = t * c;
-                for k in 0..4 {
-                    let (mkp, mkq) = (m[k][p], m[k][q]);
-                    m[k][p] = c * mkp - s * mkq;
-                    m[k][q] = s * mkp + c * mkq;
-                }
-                for k in 0..4 {
-                    let (mpk, mqk) = (m[p][k], m[q][k]);
-                    m[p][k] = c * mpk - s * mqk;
-                    m[q][k] = s * mpk + c * mqk;
-                }
-                for k in 0..4 {
-                    let (vkp, vkq) = (v[k][p], v[k][q]);
-                    v[k][p] = c * vkp - s * vkq;
-                    v[k][q] = s * vkp + c * vkq;
-                }
-            }
-        }
-    }
-    let lam: [f64; 4] = [m[0][0].max(0.0), m[1][1].max(0.0), m[2][2].max(0.0), m[3][3].max(0.0)];
-    let mut out = [[0.0; 4]; 4];
-    for a in 0..4 {
-        for b in 0..4 {
-            out[a][b] = (0..4).map(|k| v[a][k] * lam[k] * v[b][k]).sum();
-        }
-    }
-    out
-}
-
-/// Normalised MIPS energy of a chart map (see the module docs); +∞ if a weighted triangle is
-/// not positively oriented.
-pub fn mips_energy(rest: &[RestTriangle], triangles: &[[u32; 3]], uv: &[[f64; 2]]) -> f64 {
-    let total: f64 = rest.iter().map(|r| r.area).sum();
-    let sum: f64 = rest
-        .par_iter()
-        .zip(triangles.par_iter())
-        .with_min_len(2048)
-        .map(|(r, t)| {
-            if r.area == 0.0 {
-                return 0.0;
-            }
-            let j = r.jacobian([uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]]);
-            r.area * mips_density(j)
-        })
-        .sum();
-    if total > 0.0 {
-        sum / (2.0 * total)
-    } else {
-        f64::INFINITY
-    }
-}
-
-/// The flip-free start shared by the nonlinear methods: mean value weights, circle boundary.
-pub(crate) fn flip_free_start(chart: &Chart) -> Result<Vec<[f64; 2]>, ChartFailure> {
-    Ok(fixed_boundary::solve(chart, &[], BoundaryShape::Circle, Weights::MeanValue)?.uv)
-}
-
-/// Move a finished map onto the pins by the least-squares similarity; returns the note.
-pub(crate) fn honour_pins_by_similarity(uv: &mut [[f64; 2]], pins: &[(u32, [f64; 2])], method: &str) -> Option<String> {
-    if pins.is_empty() {
-        return None;
-    }
-    let mut target = vec![[f64::NAN; 2]; uv.len()];
-    for &(v, p) in pins {
-        target[v as usize] = p;
-    }
-    let moved = super::lscm::pins_span(pins) && crate::metrics::fit_similarity_points(uv, &target);
-    if !moved {
-        let (v, p) = pins[0];
-        let d = [p[0] - uv[v as usize][0], p[1] - uv[v as usize][1]];
-        for q in uv.iter_mut() {
-            *q = [q[0] + d[0], q[1] + d[1]];
-        }
-    }
-    Some(format!(
-        "{} pinned vertex(es): the {method} map was moved onto them by a least-squares similarity (exact for one or two pins)",
-        pins.len()
-    ))
-}
-
-/// Two far-apart vertices of the outer loop (by UV distance), the similarity gauge.
-pub(crate) fn gauge_vertices(chart: &Chart, uv: &[[f64; 2]]) -> [u32; 2] {
-    let outer = &chart.boundary_loops[chart.outer_loop().unwrap_or(0)];
-    let a = outer[0];
-    let pa = uv[a as usize];
-    let b = outer
-        .iter()
-        .copied()
-        .max_by(|&x, &y| {
-            let d = |v: u32| (uv[v as usize][0] - pa[0]).hypot(uv[v as usize][1] - pa[1]);
-            d(x).total_cmp(&d(y))
-        })
-        .unwrap_or(a);
-    [a, b]
-}
-
 /// Map one chart; see the module docs.
 pub fn solve(chart: &Chart, pins: &[(u32, [f64; 2])], options: &MipsOptions) -> Result<ChartSolution, ChartFailure> {
     solve_with_history(chart, pins, options).map(|(s, _)| s)
@@ -329,12 +84,7 @@ pub fn solve_with_history(
 ) -> Result<(ChartSolution, Vec<f64>), ChartFailure> {
     super::require_disk(chart)?;
     let n = chart.positions.len();
-    let rest_of = |tris: &[[u32; 3]]| -> Vec<RestTriangle> {
-        tris.iter()
-            .map(|t| RestTriangle::from_3d([chart.positions[t[0] as usize], chart.positions[t[1] as usize], chart.positions[t[2] as usize]]))
-            .collect()
-    };
-    let rest = rest_of(&chart.triangles);
+    let chart_ops = TriangleOperators::local_frames(&chart.positions, &chart.triangles);
     // LSCM minimises a conformal energy too, so when it is flip-free (quads strictly convex
     // included) it starts Newton next to the MIPS minimiser; otherwise the mean value map,
     // flip-free with convex quads by Floater's theorem on the polygon graph.
@@ -343,7 +93,7 @@ pub fn solve_with_history(
         .map(|(uv, _)| uv)
         .filter(|uv| {
             all_positive(&chart.triangles, uv)
-                && mips_energy(&rest, &chart.triangles, uv).is_finite()
+                && mips_energy(&chart_ops, &chart.triangles, uv).is_finite()
                 && super::nonconvex_quads(chart, uv) == 0
         });
     let start_name = if lscm_start.is_some() { "lscm" } else { "mean_value" };
@@ -354,11 +104,8 @@ pub fn solve_with_history(
     // The barrier covers both diagonal splits of every quad (see `barrier_triangles`).
     let (barrier, weights, left_out) = super::barrier_triangles(chart, &uv);
     let tris = &barrier;
-    let mut rest = rest_of(tris);
-    for (r, w) in rest.iter_mut().zip(&weights) {
-        r.area *= w;
-    }
-    let mut energy = mips_energy(&rest, tris, &uv);
+    let ops = TriangleOperators::local_frames(&chart.positions, tris).weighted(&weights);
+    let energy = mips_energy(&ops, tris, &uv);
     if !energy.is_finite() {
         let mut sol = ChartSolution::direct(uv);
         sol.fallback = Some(Fallback {
@@ -367,57 +114,39 @@ pub fn solve_with_history(
         });
         return Ok((sol, vec![energy]));
     }
-    let mut history = vec![energy];
 
-    // Pattern: per triangle the 21 lower-triangle entries of its 6×6 block, then the diagonal.
-    let gi = |t: &[u32; 3], k: usize| 2 * t[k % 3] + (k / 3) as u32;
-    let mut triplets: Vec<(u32, u32, f64)> = Vec::with_capacity(tris.len() * 21 + 2 * n);
-    for t in tris {
-        for k in 0..6 {
-            for l in 0..=k {
-                let (a, b) = (gi(t, k), gi(t, l));
-                triplets.push((a.max(b), a.min(b), 0.0));
-            }
-        }
-    }
-    for i in 0..2 * n as u32 {
-        triplets.push((i, i, 1.0));
-    }
+    // Pattern: per triangle the 21 lower-triangle entries of its 6×6 block over
+    // (u0, u1, u2, v0, v1, v2), then the diagonal.
+    let mut triplets = block_triplets(tris, by_component);
+    triplets.extend((0..2 * n as u32).map(|i| (i, i, 1.0)));
     let [g0, g1] = gauge_vertices(chart, &uv);
     let fixed: Vec<u32> = if g0 == g1 { vec![2 * g0, 2 * g0 + 1] } else { vec![2 * g0, 2 * g0 + 1, 2 * g1, 2 * g1 + 1] };
     let mut solver = FixedValueSolver::new(2 * n, &triplets, &fixed, Symmetry::Symmetric)?;
     let mut values = vec![0.0; triplets.len()];
     let mut grad = vec![0.0; 2 * n];
     let ls = LineSearchOptions::default();
-    let total_area: f64 = rest.iter().map(|r| r.area).sum::<f64>().max(f64::MIN_POSITIVE);
-    let mut iterations = 0;
-    let mut change = f64::INFINITY;
+    let total_area = ops.total_area.max(f64::MIN_POSITIVE);
+    let mut it = Iteration::new(energy, options.max_iterations, options.tolerance, Change::OfNew, f64::INFINITY);
     let mut shift = 1e-10;
-    for _ in 0..options.max_iterations {
-        if crate::progress::cancelled() {
-            break; // the unwrap discards this chart
-        }
+    // A cancelled unwrap discards this chart.
+    while it.go_on() {
         // Per-triangle gradient and projected Hessian blocks (normalised like the energy).
-        let blocks: Vec<([f64; 6], [f64; 21])> = rest
+        let blocks: Vec<([f64; 6], [f64; 21])> = tris
             .par_iter()
-            .zip(tris.par_iter())
+            .enumerate()
             .with_min_len(1024)
-            .map(|(r, t)| {
-                if r.area == 0.0 {
+            .map(|(f, t)| {
+                if ops.area[f] == 0.0 {
                     return ([0.0; 6], [0.0; 21]);
                 }
-                let j = r.jacobian([uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]]);
+                let j = flat(ops.jacobian(f, t, &uv));
                 let (gj, hj) = mips_derivatives(j);
-                let w = r.area / (2.0 * total_area);
-                let g6 = r.pull_gradient(gj).map(|x| w * x);
-                let h6 = r.pull_hessian(&project_psd4(&hj));
+                let w = ops.area[f] / (2.0 * total_area);
+                let g6 = ops.pull_gradient(f, gj).map(|x| w * x);
+                let h6 = ops.pull_hessian(f, &project_psd4(&hj));
                 let mut low = [0.0; 21];
-                let mut m = 0;
-                for k in 0..6 {
-                    for l in 0..=k {
-                        low[m] = w * h6[k][l];
-                        m += 1;
-                    }
+                for (m, &(k, l)) in BLOCK.iter().enumerate() {
+                    low[m] = w * h6[k][l];
                 }
                 (g6, low)
             })
@@ -426,16 +155,12 @@ pub fn solve_with_history(
         let mut diag_mean = 0.0;
         for (ti, (t, (g6, low))) in tris.iter().zip(&blocks).enumerate() {
             for k in 0..6 {
-                grad[gi(t, k) as usize] += g6[k];
+                grad[by_component(t, k) as usize] += g6[k];
             }
             values[ti * 21..ti * 21 + 21].copy_from_slice(low);
-            let mut m = 0;
-            for k in 0..6 {
-                for l in 0..=k {
-                    if k == l {
-                        diag_mean += low[m];
-                    }
-                    m += 1;
+            for (m, &(k, l)) in BLOCK.iter().enumerate() {
+                if k == l {
+                    diag_mean += low[m];
                 }
             }
         }
@@ -463,103 +188,26 @@ pub fn solve_with_history(
         let zeros = vec![0.0; fixed.len()];
         let x = solver.solve(&[zeros], &b)?;
         let dir: Vec<[f64; 2]> = (0..n).map(|i| [x[0][2 * i], x[0][2 * i + 1]]).collect();
-        let out = flip_free_line_search(tris, &mut uv, &dir, energy, |q| mips_energy(&rest, tris, q), &ls);
-        iterations += 1;
+        let out = flip_free_line_search(tris, &mut uv, &dir, it.energy(), |q| mips_energy(&ops, tris, q), &ls);
         if out.step == 0.0 {
-            change = 0.0;
+            it.stalled();
             break;
         }
-        change = (energy - out.energy) / out.energy.abs().max(f64::MIN_POSITIVE);
-        energy = out.energy;
-        history.push(energy);
-        if change < options.tolerance {
+        if it.record(out.energy) {
             break;
         }
     }
+    let (energy, iterations) = (it.energy(), it.iterations);
     let mut sol = ChartSolution::direct(uv);
     sol.iterations = iterations;
-    sol.residual = change;
+    sol.residual = it.change;
     let mut started = format!("MIPS energy {energy:.6} after {iterations} iteration(s), started from {start_name}");
-    if left_out > 0 {
-        started = format!("{started}; {left_out} quad triangle(s) of the other diagonal were not positive at the start, so those quads may stay non-convex");
+    if let Some(q) = quads_left_out_note(left_out) {
+        started = format!("{started}; {q}");
     }
     sol.note = Some(match honour_pins_by_similarity(&mut sol.uv, pins, "MIPS") {
         Some(pinned) => format!("{started}; {pinned}"),
         None => started,
     });
-    Ok((sol, history))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn psd_projection_keeps_psd_matrices_and_clips_negative_eigenvalues() {
-        let a = [[2.0, 1.0, 0.0, 0.0], [1.0, 2.0, 0.0, 0.0], [0.0, 0.0, 3.0, 0.0], [0.0, 0.0, 0.0, 1.0]];
-        let p = project_psd4(&a);
-        for i in 0..4 {
-            for j in 0..4 {
-                assert!((p[i][j] - a[i][j]).abs() < 1e-12);
-            }
-        }
-        // diag(1, −2, 3, −4) rotated: projection is diag(1, 0, 3, 0) rotated the same way.
-        let (c, s) = (0.6f64, 0.8f64);
-        let q = [[c, -s, 0.0, 0.0], [s, c, 0.0, 0.0], [0.0, 0.0, c, s], [0.0, 0.0, -s, c]];
-        let d = [1.0, -2.0, 3.0, -4.0];
-        let mk = |d: [f64; 4]| {
-            let mut m = [[0.0; 4]; 4];
-            for i in 0..4 {
-                for j in 0..4 {
-                    m[i][j] = (0..4).map(|k| q[i][k] * d[k] * q[j][k]).sum();
-                }
-            }
-            m
-        };
-        let p = project_psd4(&mk(d));
-        let want = mk([1.0, 0.0, 3.0, 0.0]);
-        for i in 0..4 {
-            for j in 0..4 {
-                assert!((p[i][j] - want[i][j]).abs() < 1e-12, "{p:?}");
-            }
-        }
-    }
-
-    #[test]
-    fn mips_derivatives_match_finite_differences() {
-        let j = [1.3, 0.4, -0.2, 0.9];
-        let (g, h) = mips_derivatives(j);
-        let eps = 1e-6;
-        for k in 0..4 {
-            let (mut jp, mut jm) = (j, j);
-            jp[k] += eps;
-            jm[k] -= eps;
-            let fd = (mips_density(jp) - mips_density(jm)) / (2.0 * eps);
-            assert!((fd - g[k]).abs() < 1e-6, "gradient {k}: {fd} vs {}", g[k]);
-            let (gp, _) = mips_derivatives(jp);
-            let (gm, _) = mips_derivatives(jm);
-            for l in 0..4 {
-                let fd = (gp[l] - gm[l]) / (2.0 * eps);
-                assert!((fd - h[l][k]).abs() < 1e-5, "hessian {l},{k}: {fd} vs {}", h[l][k]);
-            }
-        }
-        // Conformal J (a scaled rotation): energy 2, gradient zero.
-        let (c, s) = (0.8 * 1.7, 0.6 * 1.7);
-        let jc = [c, -s, s, c];
-        assert!((mips_density(jc) - 2.0).abs() < 1e-12);
-        assert!(mips_derivatives(jc).0.iter().all(|x| x.abs() < 1e-12));
-    }
-
-    #[test]
-    fn rest_triangle_jacobian_is_identity_on_its_own_layout() {
-        let q = [[0.2, -0.1], [1.5, 0.3], [0.4, 1.1]];
-        let r = RestTriangle::from_2d(q);
-        let j = r.jacobian(q);
-        for (a, b) in j.iter().zip([1.0, 0.0, 0.0, 1.0]) {
-            assert!((a - b).abs() < 1e-12);
-        }
-        let p = [[0.0, 0.0, 1.0], [2.0, 0.5, 1.0], [0.3, 1.9, 0.2]];
-        let r3 = RestTriangle::from_3d(p);
-        assert!((r3.area - triangle_area(p)).abs() < 1e-12);
-    }
+    Ok((sol, it.history))
 }

@@ -10,6 +10,7 @@ pub mod harmonic;
 pub mod lscm;
 pub mod mean_value;
 pub mod mips;
+pub mod nonlinear;
 pub mod options;
 pub mod quad_repair;
 pub mod scaffold;

@@ -1,0 +1,303 @@
+//! The ABF problem of one chart: the constraint rows (angle sums and wheel conditions per
+//! vertex, the triangle sums implied per face), the energy weights, and the evaluation of the
+//! Lagrangian's gradient and (diagonal) Hessian at a state of angles and multipliers
+//! (Sheffer & de Sturler 2001, with the log form of the wheel condition of ABF++,
+//! Sheffer et al. 2005).
+//!
+//! Preconditions: a chart with triangles and at least one boundary vertex. Failures: none
+//! here; a state with non-finite values evaluates to non-finite residuals, which the Newton
+//! iteration reports.
+
+use super::*;
+
+/// One vertex constraint row: (vertex, wheel?) — the sum row when `wheel` is false.
+#[derive(Clone, Copy)]
+pub(super) struct Row {
+    pub(super) vertex: u32,
+    pub(super) wheel: bool,
+    /// A sum row that is the inequality "sum ≤ target" (convex boundary), by a slack.
+    pub(super) ineq: bool,
+}
+
+/// Most constraint rows touching one triangle (sum and wheel rows of its three vertices).
+pub(super) const MAX_FACE_ROWS: usize = 6;
+
+/// Constraint rows touching one triangle: (row, kind wheel?, local corner of the vertex).
+#[derive(Clone, Copy, Default)]
+pub(super) struct FaceRows {
+    pub(super) len: u8,
+    pub(super) rows: [(u32, bool, u8); MAX_FACE_ROWS],
+}
+
+/// The rows' gradient on the triangle's three corners.
+#[inline]
+pub(super) fn row_grad(wheel: bool, k: usize, cot: &[f64; 3]) -> [f64; 3] {
+    let mut g = [0.0; 3];
+    if wheel {
+        // log sin α_{k+2} − log sin α_{k+1}
+        g[(k + 1) % 3] = -cot[(k + 1) % 3];
+        g[(k + 2) % 3] = cot[(k + 2) % 3];
+    } else {
+        g[k] = 1.0;
+    }
+    g
+}
+
+/// Below this many triangles a chart's per-triangle loops run sequentially (charts themselves
+/// run in parallel).
+pub(super) const PAR_MIN_FACES: usize = 4096;
+/// Triangles per parallel work item.
+pub(super) const PAR_CHUNK: usize = 1024;
+
+/// Run `f(face, item)` over per-face items, in parallel for large charts.
+pub(super) fn for_faces<T: Send>(items: &mut [T], f: impl Fn(usize, &mut T) + Sync + Send) {
+    use rayon::prelude::*;
+    if items.len() < PAR_MIN_FACES {
+        items.iter_mut().enumerate().for_each(|(i, x)| f(i, x));
+    } else {
+        items.par_iter_mut().with_min_len(PAR_CHUNK).enumerate().for_each(|(i, x)| f(i, x));
+    }
+}
+
+pub(super) struct Problem<'a> {
+    pub(super) tris: &'a [[u32; 3]],
+    pub(super) beta: Vec<f64>,
+    pub(super) w: Vec<f64>,
+    pub(super) rows: Vec<Row>,
+    /// Sum target per row (2π interior, π active boundary; unused for wheel rows).
+    pub(super) target: Vec<f64>,
+    pub(super) face_rows: Vec<FaceRows>,
+    /// Reduced ABF++ matrix pattern, upper triangle by columns (the lower triangle by rows):
+    /// column `j` holds rows `row_idx[col_ptr[j]..col_ptr[j + 1]]`, ascending, all ≤ j.
+    pub(super) col_ptr: Vec<usize>,
+    pub(super) row_idx: Vec<usize>,
+    /// Per triangle, for each pair (i, j ≤ i) of its rows in order, the index of its entry in
+    /// `row_idx`; triangle `f`'s pairs start at `slot_start[f]`.
+    pub(super) slots: Vec<u32>,
+    pub(super) slot_start: Vec<u32>,
+    /// Whether any row is an inequality (interior-point iteration).
+    pub(super) has_ineq: bool,
+    /// Lower bound of every angle (interior-point iteration), or 0 for none.
+    pub(super) lower: f64,
+}
+
+impl<'a> Problem<'a> {
+    /// `sum_target[v]`: the angle sum vertex `v` must reach (2π at interior vertices unless
+    /// prescribed, any prescribed value, the convex cap at outer-loop vertices), or `None`;
+    /// `ineq[v]`: the sum of `v` need only stay at or below its target.
+    pub(super) fn new(tris: &'a [[u32; 3]], beta: Vec<f64>, interior: &[bool], sum_target: &[Option<f64>], ineq: &[bool]) -> Self {
+        let n = interior.len();
+        let mut sum_row = vec![u32::MAX; n];
+        let mut wheel_row = vec![u32::MAX; n];
+        let mut rows = Vec::new();
+        let mut target = Vec::new();
+        for v in 0..n {
+            if let Some(t) = sum_target[v] {
+                sum_row[v] = rows.len() as u32;
+                rows.push(Row { vertex: v as u32, wheel: false, ineq: ineq[v] });
+                target.push(t);
+            }
+            if interior[v] {
+                wheel_row[v] = rows.len() as u32;
+                rows.push(Row { vertex: v as u32, wheel: true, ineq: false });
+                target.push(0.0);
+            }
+        }
+        let face_rows: Vec<FaceRows> = tris
+            .iter()
+            .map(|t| {
+                let mut fr = FaceRows::default();
+                for k in 0..3 {
+                    let v = t[k] as usize;
+                    for (r, wheel) in [(sum_row[v], false), (wheel_row[v], true)] {
+                        if r != u32::MAX {
+                            fr.rows[fr.len as usize] = (r, wheel, k as u8);
+                            fr.len += 1;
+                        }
+                    }
+                }
+                fr
+            })
+            .collect();
+        let w = beta.iter().map(|b| 1.0 / (b * b)).collect();
+        let m = rows.len();
+        let (col_ptr, row_idx, slots, slot_start) = reduced_pattern(m, &face_rows);
+        let has_ineq = rows.iter().any(|r| r.ineq);
+        Problem { tris, beta, w, rows, target, face_rows, col_ptr, row_idx, slots, slot_start, has_ineq, lower: 0.0 }
+    }
+
+    pub(super) fn m(&self) -> usize {
+        self.rows.len()
+    }
+
+    /// Index in `row_idx` of the diagonal entry of row `r` (the last of its column).
+    pub(super) fn diagonal_slot(&self, r: usize) -> usize {
+        self.col_ptr[r + 1] - 1
+    }
+}
+
+/// Newton state: angles and multipliers (vertex multipliers per vertex so that they survive a
+/// change of the constraint set).
+#[derive(Clone)]
+pub(super) struct State {
+    pub(super) alpha: Vec<f64>,
+    pub(super) lam_tri: Vec<f64>,
+    pub(super) lam_sum: Vec<f64>,
+    pub(super) lam_wheel: Vec<f64>,
+    /// Slack of every inequality sum row, per vertex (sum + slack = target, slack > 0); the
+    /// row's multiplier `lam_sum` is then its dual variable, > 0.
+    pub(super) slack: Vec<f64>,
+    /// Barrier parameter: the target of every product slack × multiplier.
+    pub(super) mu: f64,
+    /// Multiplier of every corner's lower bound `α ≥ lower` (empty without bounds).
+    pub(super) z_lo: Vec<f64>,
+}
+
+/// Residual and Newton ingredients of one triangle at the current state.
+#[derive(Clone, Copy, Default)]
+pub(super) struct FaceEval {
+    pub(super) cot: [f64; 3],
+    /// ∂L/∂α per corner.
+    pub(super) grad: [f64; 3],
+    /// Diagonal Hessian of L in α per corner (see [`evaluate`]).
+    pub(super) hess: [f64; 3],
+    /// Triangle residual: angle sum − π.
+    pub(super) c_tri: f64,
+    /// This triangle's terms of its rows' residuals, in [`FaceRows`] order.
+    pub(super) row_terms: [f64; MAX_FACE_ROWS],
+    /// Largest scaled Lagrangian gradient of the triangle's corners.
+    pub(super) stationarity: f64,
+}
+
+/// Residuals and Newton ingredients at the current state.
+pub(super) struct Eval {
+    pub(super) faces: Vec<FaceEval>,
+    /// Right-hand side residual of the Newton system per row: `c_row`, except on inequality
+    /// rows `sum − target + μ/λ` (the slack eliminated through its complementarity equation).
+    pub(super) c_newton: Vec<f64>,
+    /// Per row, `slack/λ` on inequality rows (the eliminated slack's diagonal), else 0; empty
+    /// without inequality rows.
+    pub(super) diag: Vec<f64>,
+    pub(super) residual: f64,
+    pub(super) stationarity: f64,
+    /// Largest product slack × multiplier of the inequality rows (0 without).
+    pub(super) complementarity: f64,
+}
+
+/// Residuals, Lagrangian gradient and Hessian at the state.
+///
+/// The Hessian of the Lagrangian in α is diagonal: `2/β² ∓ λ_wheel / sin²α` (log-sine wheel
+/// rows). It is used exactly where the triangle's projected Hessian (on angle changes that
+/// keep its sum) is positive definite — all three entries positive, or exactly one negative
+/// with `Σ 1/h < 0` (with a margin) — which keeps the reduced ABF++ matrix positive definite
+/// and gives Newton's quadratic convergence; other triangles use the energy's `2/β²`.
+pub(super) fn evaluate(p: &Problem<'_>, s: &State) -> Eval {
+    let nf = p.tris.len();
+    let mut faces = vec![FaceEval::default(); nf];
+    for_faces(&mut faces, |f, fe| {
+        let a = [s.alpha[3 * f], s.alpha[3 * f + 1], s.alpha[3 * f + 2]];
+        let mut sn = [0.0; 3];
+        let mut ct = [0.0; 3];
+        let mut ls = [0.0; 3];
+        for k in 0..3 {
+            let (si, co) = a[k].sin_cos();
+            sn[k] = si;
+            ct[k] = co / si;
+            ls[k] = si.ln();
+        }
+        let mut grad = [0.0; 3];
+        let mut hess = [0.0; 3];
+        let mut energy_hess = [0.0; 3];
+        for k in 0..3 {
+            let c = 3 * f + k;
+            grad[k] = 2.0 * p.w[c] * (a[k] - p.beta[c]) + s.lam_tri[f];
+            energy_hess[k] = 2.0 * p.w[c];
+            hess[k] = energy_hess[k];
+        }
+        let fr = &p.face_rows[f];
+        for (j, &(_, wheel, k)) in fr.rows[..fr.len as usize].iter().enumerate() {
+            let k = k as usize;
+            let v = p.tris[f][k] as usize;
+            let (k1, k2) = ((k + 1) % 3, (k + 2) % 3);
+            if wheel {
+                fe.row_terms[j] = ls[k2] - ls[k1];
+                let l = s.lam_wheel[v];
+                grad[k1] -= l * ct[k1];
+                grad[k2] += l * ct[k2];
+                hess[k1] += l / (sn[k1] * sn[k1]);
+                hess[k2] -= l / (sn[k2] * sn[k2]);
+            } else {
+                fe.row_terms[j] = a[k];
+                grad[k] += s.lam_sum[v];
+            }
+        }
+        let mut stat: f64 = 0.0;
+        let mut fallback_hess = energy_hess;
+        if p.lower > 0.0 {
+            // Lower bounds α ≥ lower, primal-dual: the bound's multiplier z enters the
+            // gradient as −z; the Newton system, with dz eliminated through z (α − lower) = μ,
+            // sees the Hessian + z/(α − lower) and the gradient with −μ/(α − lower) for −z.
+            for k in 0..3 {
+                let c = 3 * f + k;
+                let gap = a[k] - p.lower;
+                let z = s.z_lo[c];
+                stat = stat.max((grad[k] - z).abs() / energy_hess[k]);
+                hess[k] += z / gap;
+                fallback_hess[k] += z / gap;
+                grad[k] -= s.mu / gap;
+            }
+        } else {
+            for k in 0..3 {
+                stat = stat.max(grad[k].abs() / energy_hess[k]);
+            }
+        }
+        // Exact Hessian where the triangle's projected Hessian is safely positive definite.
+        let neg = hess.iter().filter(|&&h| h <= 0.0).count();
+        let exact_ok = neg == 0 || {
+            let inv = [1.0 / hess[0], 1.0 / hess[1], 1.0 / hess[2]];
+            let largest = inv.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+            neg == 1 && inv.iter().all(|x| x.is_finite()) && inv[0] + inv[1] + inv[2] < -PROJECTED_HESSIAN_MARGIN * largest
+        };
+        if !exact_ok {
+            hess = fallback_hess;
+        }
+        fe.cot = ct;
+        fe.grad = grad;
+        fe.hess = hess;
+        fe.c_tri = a[0] + a[1] + a[2] - PI;
+        fe.stationarity = stat;
+    });
+    let mut c_row: Vec<f64> = p.rows.iter().zip(&p.target).map(|(row, t)| if row.wheel { 0.0 } else { -t }).collect();
+    for (fe, fr) in faces.iter().zip(&p.face_rows) {
+        for (term, row) in fe.row_terms.iter().zip(&fr.rows[..fr.len as usize]) {
+            c_row[row.0 as usize] += term;
+        }
+    }
+    let mut complementarity: f64 = 0.0;
+    if p.lower > 0.0 {
+        for (a, z) in s.alpha.iter().zip(&s.z_lo) {
+            complementarity = complementarity.max(z * (a - p.lower));
+        }
+    }
+    let (mut c_newton, mut diag) = (Vec::new(), Vec::new());
+    if p.has_ineq {
+        c_newton = c_row.clone();
+        diag = vec![0.0; c_row.len()];
+        for (r, row) in p.rows.iter().enumerate() {
+            if row.ineq {
+                let v = row.vertex as usize;
+                let (sl, z) = (s.slack[v], s.lam_sum[v]);
+                c_newton[r] = c_row[r] + s.mu / z;
+                c_row[r] += sl;
+                diag[r] = sl / z;
+                complementarity = complementarity.max(sl * z);
+            }
+        }
+    }
+    let residual = faces.iter().map(|fe| fe.c_tri).chain(c_row.iter().copied()).fold(0.0f64, |m, x| m.max(x.abs()));
+    let stationarity = faces.iter().fold(0.0f64, |m, fe| m.max(fe.stationarity));
+    if !p.has_ineq {
+        c_newton = c_row;
+    }
+    Eval { faces, c_newton, diag, residual, stationarity, complementarity }
+}

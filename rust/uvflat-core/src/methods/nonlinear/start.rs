@@ -1,0 +1,79 @@
+//! Flip-free starting maps of the barrier methods (SLIM, MIPS, scaffold) and the choice among
+//! them.
+//!
+//! Candidates: LSCM (Lévy et al. 2002; it minimises a conformal energy, so when it is
+//! flip-free it starts next to the minimiser) and the mean value map with the boundary on a
+//! circle (Floater 2003; flip-free by Tutte's theorem, quads convex on the polygon graph).
+//! [`pick`] ranks the valid candidates by their number of non-convex quads (no barrier can make
+//! a quad convex again), then by energy.
+//!
+//! Preconditions: a disk chart, possibly with holes. Failures: a candidate whose solve fails
+//! is reported by name with the reason; [`flip_free_start`] fails like
+//! [`crate::methods::fixed_boundary::solve`].
+
+use crate::charts::Chart;
+use crate::methods::fixed_boundary::{self, Weights};
+use crate::methods::{chart_angles, lscm, nonconvex_quads, BoundaryShape, ChartFailure};
+
+/// A starting map: its UVs and the name of the method that made it.
+pub type Candidate = (Vec<[f64; 2]>, &'static str);
+
+/// The mean value map with the boundary on a circle: the flip-free start of last resort.
+pub fn flip_free_start(chart: &Chart) -> Result<Vec<[f64; 2]>, ChartFailure> {
+    Ok(fixed_boundary::solve(chart, &[], BoundaryShape::Circle, Weights::MeanValue)?.uv)
+}
+
+/// The candidate starting maps, computed side by side (independent solves): LSCM (if
+/// `with_lscm`) and the mean value map on a circle, both honouring `start_pins`. Returns the
+/// maps that could be computed and why the others could not.
+pub fn candidate_starts(chart: &Chart, start_pins: &[(u32, [f64; 2])], with_lscm: bool) -> (Vec<Candidate>, Vec<String>) {
+    let (lscm_start, mean_value_start) = rayon::join(
+        || {
+            with_lscm.then(|| {
+                let angles = chart_angles(&chart.positions, &chart.triangles);
+                lscm::solve_with_angles(chart, &angles, start_pins)
+            })
+        },
+        || fixed_boundary::solve(chart, start_pins, BoundaryShape::Circle, Weights::MeanValue),
+    );
+    let (mut candidates, mut rejected) = (Vec::new(), Vec::new());
+    match lscm_start {
+        Some(Ok((uv, _))) => candidates.push((uv, "lscm")),
+        Some(Err(e)) => rejected.push(format!("lscm: {}", e.0)),
+        None => {}
+    }
+    match mean_value_start {
+        Ok(s) => candidates.push((s.uv, "mean_value")),
+        Err(e) => rejected.push(format!("mean_value: {}", e.0)),
+    }
+    (candidates, rejected)
+}
+
+/// The best of `candidates`: each is first changed by `prepare` (e.g. scaled optimally), then
+/// `assess` gives its energy or why it is not a valid start (pushed to `rejected` as
+/// "name: why"). The valid one with the fewest non-convex quads of `chart`, then the lowest
+/// energy, wins (the first on a tie). Returns its UVs, energy and name.
+pub fn pick(
+    chart: &Chart,
+    candidates: Vec<Candidate>,
+    rejected: &mut Vec<String>,
+    mut prepare: impl FnMut(&mut Vec<[f64; 2]>),
+    mut assess: impl FnMut(&[[f64; 2]]) -> Result<f64, String>,
+) -> Option<(Vec<[f64; 2]>, f64, &'static str)> {
+    let mut best: Option<(Vec<[f64; 2]>, f64, &'static str, usize)> = None;
+    for (mut uv, name) in candidates {
+        prepare(&mut uv);
+        let e = match assess(&uv) {
+            Ok(e) => e,
+            Err(why) => {
+                rejected.push(format!("{name}: {why}"));
+                continue;
+            }
+        };
+        let bad = nonconvex_quads(chart, &uv);
+        if best.as_ref().is_none_or(|b| (bad, e) < (b.3, b.1)) {
+            best = Some((uv, e, name, bad));
+        }
+    }
+    best.map(|(uv, e, name, _)| (uv, e, name))
+}
