@@ -360,7 +360,10 @@ pub fn solve_with_history(
                 for (p, v) in pattern.iter_mut().zip(&values) {
                     p.2 = *v;
                 }
-                FixedValueSolver::new(2 * n, &pattern, &fixed_ids, Symmetry::Symmetric).map(|s| solver = Some(s))
+                let made = FixedValueSolver::new(2 * n, &pattern, &fixed_ids, Symmetry::Symmetric).map(|s| solver = Some(s));
+                // The solver keeps the pattern; this copy is not needed again.
+                pattern = Vec::new();
+                made
             }
             Some(s) => s.refactor(&values),
         };

@@ -110,7 +110,7 @@ pub const DENSE_MAX: usize = 24;
 /// Where an input triplet goes.
 #[derive(Clone, Copy)]
 enum Slot {
-    /// Entry of `Q_FF` (index into the list of its entries, duplicates included).
+    /// Entry of `Q_FF`: its position in the compressed columns (duplicates share one).
     FreeFree(u32),
     /// Entry of `Q_FC`: (free row, fixed column position).
     FreeFixed(u32, u32),
@@ -124,9 +124,7 @@ enum Slot {
 const DUPLICATE: u32 = 1 << 31;
 
 /// The entries `pairs` in compressed-column order (by column, then row), duplicates flagged
-/// with [`DUPLICATE`]; ties ordered exactly as faer's `try_new_from_indices` orders them
-/// (bucket by column in input order, then the same unstable sort by (row, col)), so values
-/// are summed in the same order as faer's own assembly would.
+/// with [`DUPLICATE`], as faer's `try_new_from_indices` orders them.
 fn compressed_order(ncols: usize, pairs: &[Pair<usize, usize>]) -> Vec<u32> {
     let mut start = vec![0usize; ncols + 1];
     for p in pairs {
@@ -162,11 +160,6 @@ pub struct FixedValueSolver<T: Scalar = f64> {
     fixed: Vec<u32>,
     slots: Vec<Slot>,
     ff_symbolic: SymbolicSparseColMat<usize>,
-    /// Values of the entries of `Q_FF` in input order (duplicates included).
-    pair_values: Vec<T>,
-    /// Entries in compressed-column order; the top bit marks a duplicate of the previous one
-    /// (summed into it, in this order: the order faer itself sums duplicates in).
-    sum_order: Vec<u32>,
     /// Values of `Q_FF` in the order of `ff_symbolic`, rewritten in place by every refactor.
     ff_values: Vec<T>,
     coupling: Vec<(u32, u32, T)>,
@@ -225,7 +218,23 @@ impl<T: Scalar> FixedValueSolver<T> {
         if pairs.len() >= DUPLICATE as usize {
             return Err(SolveError::Other(format!("{} matrix entries exceed the solver's 2³¹ limit", pairs.len())));
         }
-        let sum_order = compressed_order(nf, &pairs);
+        // Position of every entry in the compressed columns (duplicates summed into one), so
+        // that new values go straight to their place: 12 bytes per input triplet are kept.
+        let mut position = vec![0u32; pairs.len()];
+        let mut at = u32::MAX;
+        for e in compressed_order(nf, &pairs) {
+            if e & DUPLICATE == 0 {
+                at = at.wrapping_add(1);
+            }
+            position[(e & !DUPLICATE) as usize] = at;
+        }
+        drop(pairs);
+        for slot in slots.iter_mut() {
+            if let Slot::FreeFree(k) = slot {
+                *k = position[*k as usize];
+            }
+        }
+        drop(position);
         let nnz_ff = ff_symbolic.row_idx().len();
         let symbolic = match symmetry {
             _ if nf <= dense_max => Symbolic::Dense,
@@ -255,15 +264,13 @@ impl<T: Scalar> FixedValueSolver<T> {
             fixed: fixed.to_vec(),
             slots,
             ff_symbolic,
-            pair_values: vec![T::zero_value(); pairs.len()],
-            sum_order,
             ff_values: vec![T::zero_value(); nnz_ff],
             coupling: Vec::new(),
             symbolic,
             factor: None,
         };
-        let values: Vec<T> = triplets.iter().map(|t| t.2).collect();
-        solver.refactor(&values)?;
+        solver.load_values(triplets.iter().map(|t| t.2));
+        solver.factor_loaded()?;
         Ok(solver)
     }
 
@@ -272,25 +279,27 @@ impl<T: Scalar> FixedValueSolver<T> {
     /// reused.
     pub fn refactor(&mut self, values: &[T]) -> Result<(), SolveError> {
         assert_eq!(values.len(), self.slots.len(), "refactor needs one value per original triplet");
+        self.load_values(values.iter().copied());
+        self.factor_loaded()
+    }
+
+    /// Write new values (one per original triplet, in their order) into `Q_FF`, duplicates
+    /// summed in input order, and into the coupling `Q_FC`.
+    fn load_values(&mut self, values: impl Iterator<Item = T>) {
         self.coupling.clear();
-        for (slot, &v) in self.slots.iter().zip(values) {
+        self.ff_values.iter_mut().for_each(|v| *v = T::zero_value());
+        for (slot, v) in self.slots.iter().zip(values) {
             match *slot {
-                Slot::FreeFree(k) => self.pair_values[k as usize] = v,
+                Slot::FreeFree(k) => self.ff_values[k as usize] += v,
                 Slot::FreeFixed(r, c) => self.coupling.push((r, c, v)),
                 Slot::FreeFixedConj(r, c) => self.coupling.push((r, c, v.conjugate())),
                 Slot::Unused => {}
             }
         }
-        let mut at = usize::MAX;
-        for &e in &self.sum_order {
-            let v = self.pair_values[(e & !DUPLICATE) as usize];
-            if e & DUPLICATE != 0 {
-                self.ff_values[at] += v;
-            } else {
-                at = at.wrapping_add(1);
-                self.ff_values[at] = v;
-            }
-        }
+    }
+
+    /// Numeric factorization of the loaded `Q_FF`.
+    fn factor_loaded(&mut self) -> Result<(), SolveError> {
         let mat = SparseColMatRef::new(self.ff_symbolic.as_ref(), &self.ff_values);
         self.factor = None;
         self.factor = Some(match &mut self.symbolic {
