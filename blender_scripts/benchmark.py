@@ -17,7 +17,9 @@ charts, uvflat reports failed charts), charts, flipped triangles, overlapping ch
 area-weighted conformal / area / symmetric Dirichlet distortions (1 is perfect).
 
 Cases besides the files: ``camelhead_smart`` (camelhead cut by Blender's Smart UV Project,
-seams marked from its islands: 128 charts, the many-charts case) and, with
+seams marked from its islands: 128 charts, the many-charts case; any other shared mesh
+``NAME`` can be named as ``NAME_smart``, e.g. ``cube_40k_smart``, 47,240 charts of one or
+two quads) and, with
 ``--large`` or when named (slow), ``disk_840k``: a flat disk of 128 triangles subdivided with
 80 cuts, 839,808 triangles in one chart, and ``disk_300k``: the same with 47 cuts, 294,912
 triangles. ``--blender-methods none`` leaves Blender's own unwraps out (they take long on
@@ -94,6 +96,12 @@ def mesh_list(names, large=False):
         smart = common.SHARED_MESHES / f"{SMART_MESH}.off"
         if smart.is_file():
             available[f"{SMART_MESH}_smart"] = smart
+        # Any other shared mesh cut by Smart UV Project, when named (e.g. cube_40k_smart:
+        # tens of thousands of one-quad charts).
+        for name in names or ():
+            stem = name[: -len("_smart")] if name.endswith("_smart") else None
+            if stem and name not in available and stem in available and available[stem] is not None:
+                available[name] = available[stem]
     else:
         print(f"note: {common.SHARED_MESHES} not found; only Blender's primitives are measured")
     for disk in LARGE_DISKS:
@@ -120,14 +128,7 @@ def smart_cut(obj):
 def large_disk(segments=128, cuts=80, name=LARGE_DISK):
     """A flat disk: a triangle fan of ``segments`` triangles, every triangle split by ``cuts``
     cuts per edge into (cuts + 1)² triangles (839,808 with the defaults)."""
-    bpy.ops.mesh.primitive_circle_add(vertices=segments, fill_type="TRIFAN")
-    obj = bpy.context.active_object
-    obj.name = name
-    common.edit_mode([obj])
-    bpy.ops.mesh.select_all(action="SELECT")
-    bpy.ops.mesh.subdivide(number_cuts=cuts)
-    bpy.ops.object.mode_set(mode="OBJECT")
-    return obj
+    return common.subdivided_disk(name, segments, cuts)
 
 
 def load(name, path):

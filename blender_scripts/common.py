@@ -330,6 +330,21 @@ def seams_from_islands(obj):
     bpy.ops.object.mode_set(mode="OBJECT")
 
 
+def subdivided_disk(name, segments, cuts):
+    """A flat disk: a triangle fan of ``segments`` triangles, every triangle split by ``cuts``
+    cuts per edge, ``segments * (cuts + 1)**2`` triangles in one island; object mode after."""
+    import bpy
+
+    bpy.ops.mesh.primitive_circle_add(vertices=segments, fill_type="TRIFAN")
+    obj = bpy.context.active_object
+    obj.name = name
+    edit_mode([obj])
+    bpy.ops.mesh.select_all(action="SELECT")
+    bpy.ops.mesh.subdivide(number_cuts=cuts)
+    object_mode()
+    return obj
+
+
 def edit_mode(objects, select_all=True):
     """Make ``objects`` (mesh objects) the ones in edit mode, all faces selected."""
     import bpy

@@ -32,14 +32,7 @@ COVERAGE_REL = 0.02
 
 def _disk(name="Disk", segments=16, cuts=3):
     """A flat disk (one island), ``segments * (cuts + 1)**2`` triangles."""
-    bpy.ops.mesh.primitive_circle_add(vertices=segments, fill_type="TRIFAN")
-    obj = bpy.context.active_object
-    obj.name = name
-    common.edit_mode([obj])
-    bpy.ops.mesh.select_all(action="SELECT")
-    bpy.ops.mesh.subdivide(number_cuts=cuts)
-    common.object_mode()
-    return obj
+    return common.subdivided_disk(name, segments, cuts)
 
 
 def _coverage(data):

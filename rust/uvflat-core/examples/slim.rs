@@ -1,7 +1,7 @@
 //! Per-iteration time split of SLIM (and ARAP totals) on the largest chart of a mesh:
 //!
 //! ```text
-//! cargo run --release --example slim -- MESH [--subdivide K] [--iterations N] [--start auto|mean_value]
+//! cargo run --release --example slim -- MESH [--subdivide K] [--iterations N] [--start auto|mean_value] [--step newton|proxy]
 //! ```
 //!
 //! `--subdivide K` splits every triangle into four by its edge midpoints, K times (camelhead
@@ -48,7 +48,7 @@ fn subdivide(s: &common::Soup) -> common::Soup {
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    let path = args.get(1).expect("usage: slim MESH [--subdivide K] [--iterations N] [--start auto|mean_value]");
+    let path = args.get(1).expect("usage: slim MESH [--subdivide K] [--iterations N] [--start auto|mean_value] [--step newton|proxy]");
     let flag = |name: &str| args.iter().position(|a| a == name).and_then(|i| args.get(i + 1)).cloned();
     let mut soup = common::load(std::path::Path::new(path));
     for _ in 0..flag("--subdivide").map(|k| k.parse::<usize>().unwrap()).unwrap_or(0) {
@@ -58,6 +58,9 @@ fn main() {
     if let Some(n) = flag("--iterations") {
         options.max_iterations = n.parse().unwrap();
         options.tolerance = 0.0;
+    }
+    if flag("--step").as_deref() == Some("proxy") {
+        options.step = slim::SlimStep::Proxy;
     }
     if flag("--start").as_deref() == Some("mean_value") {
         options.start = slim::SlimStart::MeanValue;
