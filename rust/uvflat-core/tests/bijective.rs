@@ -59,7 +59,9 @@ fn disk_charts(s: &Soup, seams: &[[u32; 2]]) -> Vec<uvflat_core::charts::Chart> 
 }
 
 fn assert_non_increasing(what: &str, h: &[f64]) {
-    assert!(h.len() >= 2, "{what}: no iteration ran ({h:?})");
+    // A start already at the isometric optimum (energy 1, up to round-off) leaves no step to take.
+    let optimal_start = h.len() == 1 && (h[0] - 1.0).abs() < 1e-9;
+    assert!(h.len() >= 2 || optimal_start, "{what}: no iteration ran ({h:?})");
     for w in h.windows(2) {
         assert!(w[1] <= w[0], "{what}: energy rose from {} to {}", w[0], w[1]);
     }

@@ -83,8 +83,9 @@ pub struct BlockPattern {
     pub row_idx: Vec<usize>,
     /// Value slot of every [`BLOCK`] entry of every triangle.
     pub chart_slots: Vec<[u32; 21]>,
-    /// Symbolic analysis of the pattern.
-    pub symbolic: faer::sparse::linalg::solvers::SymbolicLlt<usize>,
+    /// Symbolic analysis of the pattern, on the fill-reducing ordering of
+    /// [`crate::solvers::ordering`] (AMD, nested dissection for large charts).
+    pub symbolic: faer::sparse::linalg::cholesky::SymbolicCholesky<usize>,
 }
 
 impl BlockPattern {
@@ -140,8 +141,16 @@ impl BlockPattern {
             row_idx[col_ptr[c]..col_ptr[c + 1]].sort_unstable();
         }
         let sym = faer::sparse::SymbolicSparseColMatRef::new_checked(n2, n2, &col_ptr, None, &row_idx);
-        let symbolic = faer::sparse::linalg::solvers::SymbolicLlt::try_new(sym, faer::Side::Lower)
-            .map_err(|e| format!("symbolic analysis failed: {e:?}"))?;
+        let perm = crate::solvers::ordering::fill_reducing(crate::solvers::ordering::OrderingKind::Auto, n2, &col_ptr, &row_idx)
+            .map_err(|e| format!("ordering failed: {e:?}"))?;
+        let perm_ref = faer::perm::PermRef::new_checked(&perm.fwd, &perm.inv, n2);
+        let symbolic = faer::sparse::linalg::cholesky::factorize_symbolic_cholesky(
+            sym,
+            faer::Side::Lower,
+            faer::sparse::linalg::cholesky::SymmetricOrdering::Custom(perm_ref),
+            Default::default(),
+        )
+        .map_err(|e| format!("symbolic analysis failed: {e:?}"))?;
         let mut pattern = BlockPattern { col_ptr, row_idx, chart_slots: Vec::new(), symbolic };
         let slots: Option<Vec<[u32; 21]>> = tris
             .par_iter()

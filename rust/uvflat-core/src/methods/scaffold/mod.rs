@@ -219,7 +219,6 @@ fn run(
     options: &ScaffoldOptions,
     policy: Policy,
 ) -> Result<(ChartSolution, ScaffoldHistory), ChartFailure> {
-    use faer::linalg::solvers::Solve;
     use std::time::Instant;
     crate::methods::require_disk(chart)?;
     let tris = &chart.triangles;

@@ -6,6 +6,27 @@
 
 use crate::methods::nonlinear::pattern::BlockPattern;
 
+/// A numeric Cholesky factor of a global step on its pattern's symbolic analysis.
+pub(super) struct StepFactor<'p> {
+    pattern: &'p BlockPattern,
+    l_values: Vec<f64>,
+}
+
+impl StepFactor<'_> {
+    /// Solve in place with the factor.
+    pub(super) fn solve_in_place(&self, x: faer::MatMut<'_, f64>) {
+        let par = faer::get_global_parallelism();
+        let symbolic = &self.pattern.symbolic;
+        let mut mem = faer::dyn_stack::MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(x.ncols(), par));
+        faer::sparse::linalg::cholesky::LltRef::new(symbolic, &self.l_values).solve_in_place_with_conj(
+            faer::Conj::No,
+            x,
+            par,
+            faer::dyn_stack::MemStack::new(&mut mem),
+        );
+    }
+}
+
 /// Relative diagonal shifts tried, in order, when the global step's matrix does not factor.
 const SHIFTS: [f64; 6] = [0.0, 1e-12, 1e-10, 1e-8, 1e-6, 1e-4];
 
@@ -18,12 +39,12 @@ const SHIFTS: [f64; 6] = [0.0, 1e-12, 1e-10, 1e-8, 1e-6, 1e-4];
 /// that worked. Returns the factor and the relative shift used (0 when none was needed).
 ///
 /// Errors: the factorisation's message when every shift fails.
-pub(super) fn factor_regularised(
-    pat: &BlockPattern,
+pub(super) fn factor_regularised<'p>(
+    pat: &'p BlockPattern,
     values: &mut [f64],
     b: &mut [f64],
     uv: &[[f64; 2]],
-) -> Result<(faer::sparse::linalg::solvers::Llt<usize, f64>, f64), String> {
+) -> Result<(StepFactor<'p>, f64), String> {
     let n2 = pat.col_ptr.len() - 1;
     let diag: Vec<usize> = (0..n2).map(|i| pat.slot(i, i).expect("every diagonal entry is in the pattern")).collect();
     let mean = diag.iter().map(|&k| values[k].abs()).sum::<f64>() / n2.max(1) as f64;
@@ -41,8 +62,21 @@ pub(super) fn factor_regularised(
         }
         let sym = faer::sparse::SymbolicSparseColMatRef::new_checked(n2, n2, &pat.col_ptr, None, &pat.row_idx);
         let mat = faer::sparse::SparseColMatRef::new(sym, values);
-        match faer::sparse::linalg::solvers::Llt::try_new_with_symbolic(pat.symbolic.clone(), mat, faer::Side::Lower) {
-            Ok(f) => return Ok((f, shift)),
+        let par = faer::get_global_parallelism();
+        let mut l_values = vec![0.0; pat.symbolic.len_val()];
+        let mut mem = faer::dyn_stack::MemBuffer::try_new(pat.symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()))
+            .map_err(|e| format!("{e:?}"))?;
+        let numeric = pat.symbolic.factorize_numeric_llt(
+            &mut l_values,
+            mat,
+            faer::Side::Lower,
+            Default::default(),
+            par,
+            faer::dyn_stack::MemStack::new(&mut mem),
+            Default::default(),
+        );
+        match numeric {
+            Ok(_) => return Ok((StepFactor { pattern: pat, l_values }, shift)),
             Err(e) => last = format!("{e:?}"),
         }
     }
