@@ -112,7 +112,6 @@ mod tests {
         assert!(shift > 0.0 && shift <= 1e-6, "shift {shift}");
         // The shift is a proximal term: the step from the current map solves (A + δI) x = δ x_k,
         // and with b = 0 the current map (a translation-free fit) stays close.
-        use faer::linalg::solvers::Solve;
         let mut x = faer::Mat::<f64>::from_fn(8, 1, |i, _| b[i]);
         f.solve_in_place(x.as_mut());
         assert!((0..8).all(|i| x[(i, 0)].is_finite()));
