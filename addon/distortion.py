@@ -70,22 +70,16 @@ def flipped_faces(uv, face_sizes, chart, solved):
     return ok & (area * majority <= 0.0)
 
 
-def measure(core, job, new_uv, solved):
+def measure(job, new_uv, solved):
     """``(conformal, area, flipped)`` per face of ``job``'s mesh for the ``solved`` faces.
 
     The conformal and area values come with the unwrap's result (the core measures every
-    chart on the UVs it returns, with the render triangulation); ``uvflat.metrics`` measures
-    them again only for a result without them. Flips are counted here, on ``new_uv``."""
+    chart on the UVs it returns, with the render triangulation); flips are counted here, on
+    the new per-corner UVs."""
     result = job.result
-    if hasattr(result, "face_conformal") and hasattr(result, "face_area"):
-        keep = np.asarray(solved, dtype=bool)
-        conformal = np.where(keep, np.asarray(result.face_conformal), np.nan)
-        area = np.where(keep, np.asarray(result.face_area), np.nan)
-    else:
-        m = core.metrics(job.positions, job.corner_verts.astype(np.int64),
-                         job.face_sizes.astype(np.int64), new_uv.astype(np.float64),
-                         selected=solved)
-        conformal, area = np.asarray(m.face_conformal), np.asarray(m.face_area)
+    keep = np.asarray(solved, dtype=bool)
+    conformal = np.where(keep, np.asarray(result.face_conformal), np.nan)
+    area = np.where(keep, np.asarray(result.face_area), np.nan)
     flipped = flipped_faces(new_uv, job.face_sizes, np.asarray(result.chart), solved)
     return conformal, area, flipped
 

@@ -298,7 +298,7 @@ def _solve(core, job: _Job, method, options, use_fit, progress=None):
     )
 
 
-def _write(job: _Job, core, phases=None):
+def _write(job: _Job, phases=None):
     mesh = job.obj.data
     name, job.created_uv = mesh_io.ensure_uv_map(mesh)
     job.written = True  # from here on, _restore must undo this job
@@ -312,7 +312,7 @@ def _write(job: _Job, core, phases=None):
     # per-face quality of the returned UVs (before the aspect correction; packing moves
     # islands by similarities only, which changes none of it)
     t0 = time.perf_counter()
-    quality = distortion.measure(core, job, new_uv, solved)
+    quality = distortion.measure(job, new_uv, solved)
     if phases is not None:
         _lap(phases, "quality", t0)
     if job.aspect != 1.0:
@@ -640,7 +640,7 @@ def _write_and_pack(context, run: Run) -> Summary:
             # 3. write (UVs, then the seams automatic seams cut)
             t0, quality = time.perf_counter(), phases.get("quality", 0.0)
             for job in jobs:
-                _write(job, run._core, phases)
+                _write(job, phases)
                 if run.mark_seams:
                     summary.seams_added += _mark_new_seams(job)
                 else:

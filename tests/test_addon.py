@@ -399,8 +399,11 @@ def test_failed_chart_keeps_uvs_exactly(ext, scene, monkeypatch):
         solved = np.asarray(r.face_solved, dtype=bool) & (chart != 0)
         charts = [SimpleNamespace(**{**c.as_dict(), "status": "failed", "reason": "test failure"})
                   if c.id == 0 else c for c in r.charts]
+        failed = ~solved
         return SimpleNamespace(uv=np.asarray(r.uv), chart=chart, face_solved=solved,
-                               charts=charts, seconds=r.seconds)
+                               charts=charts, seconds=r.seconds,
+                               face_conformal=np.where(failed, np.nan, r.face_conformal),
+                               face_area=np.where(failed, np.nan, r.face_area))
 
     monkeypatch.setattr(uvflat, "unwrap", unwrap_with_failure)
     obj = suzanne()

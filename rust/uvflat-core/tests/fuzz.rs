@@ -11,9 +11,10 @@
 //! The default run is bounded (2,000 cases, a few seconds in release);
 //! `UVFLAT_FUZZ_CASES=100000 cargo test --release -p uvflat-core --test fuzz` runs longer.
 
+mod common;
+
 use proptest::prelude::*;
-use uvflat_core::methods::{abf, arap, mips, scaffold, slim};
-use uvflat_core::{metrics, unwrap, BoundaryShape, ChartStatus, MeshInput, Method, SpectralOptions, UnwrapOptions};
+use uvflat_core::{metrics, unwrap, ChartStatus, MeshInput, Method, UnwrapOptions};
 
 /// splitmix64: the meshes are generated from one seed, so a failing case is a few integers.
 struct Rng(u64);
@@ -103,24 +104,7 @@ fn delaunay_disk(rng: &mut Rng, n: usize) -> Mesh {
 }
 
 fn methods() -> Vec<Method> {
-    let mut v = Vec::new();
-    for b in [BoundaryShape::Circle, BoundaryShape::Square, BoundaryShape::Virtual] {
-        v.push(Method::Tutte { boundary: b });
-        v.push(Method::Harmonic { boundary: b });
-        v.push(Method::MeanValue { boundary: b });
-    }
-    v.extend([
-        Method::Lscm,
-        Method::Spectral(SpectralOptions { max_iterations: 50, ..Default::default() }),
-        Method::Abf(abf::AbfOptions::default()),
-        Method::Abf(abf::AbfOptions { solver: abf::AbfSolver::Plain, ..Default::default() }),
-        Method::Abf(abf::AbfOptions { boundary: abf::AbfBoundary::Convex, ..Default::default() }),
-        Method::Arap(arap::ArapOptions { max_iterations: 10, ..Default::default() }),
-        Method::Slim(slim::SlimOptions { max_iterations: 10, ..Default::default() }),
-        Method::Mips(mips::MipsOptions { max_iterations: 10, ..Default::default() }),
-        Method::Scaffold(scaffold::ScaffoldOptions { max_iterations: 5, ..Default::default() }),
-    ]);
-    v
+    common::every_method(10, 50)
 }
 
 /// One random case: everything follows from these integers.

@@ -87,24 +87,7 @@ fn every_entry_point_validates_the_same_way() {
 }
 
 fn every_method() -> Vec<Method> {
-    use uvflat_core::methods::{abf, arap, mips, scaffold, slim};
-    let mut v = Vec::new();
-    for b in [BoundaryShape::Circle, BoundaryShape::Square, BoundaryShape::Virtual] {
-        v.push(Method::Tutte { boundary: b });
-        v.push(Method::Harmonic { boundary: b });
-        v.push(Method::MeanValue { boundary: b });
-    }
-    v.extend([
-        Method::Lscm,
-        Method::Spectral(uvflat_core::SpectralOptions::default()),
-        Method::Abf(abf::AbfOptions::default()),
-        Method::Abf(abf::AbfOptions { boundary: abf::AbfBoundary::Convex, ..Default::default() }),
-        Method::Arap(arap::ArapOptions { max_iterations: 20, ..Default::default() }),
-        Method::Slim(slim::SlimOptions { max_iterations: 20, ..Default::default() }),
-        Method::Mips(mips::MipsOptions { max_iterations: 20, ..Default::default() }),
-        Method::Scaffold(scaffold::ScaffoldOptions { max_iterations: 10, ..Default::default() }),
-    ]);
-    v
+    common::every_method(20, uvflat_core::SpectralOptions::default().max_iterations)
 }
 
 /// Every report is honest: finite UVs on every chart that is not failed, flips as measured by

@@ -120,7 +120,7 @@ enum Slot {
     Unused,
 }
 
-/// Top bit of a [`FixedValueSolver`] `sum_order` entry: a duplicate of the previous entry.
+/// Top bit of a [`compressed_order`] entry: a duplicate of the previous entry.
 const DUPLICATE: u32 = 1 << 31;
 
 /// The entries `pairs` in compressed-column order (by column, then row), duplicates flagged

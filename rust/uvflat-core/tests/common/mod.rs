@@ -175,3 +175,28 @@ pub fn subdivide(s: &Soup) -> Soup {
     let face_sizes = vec![3; corner_verts.len() / 3];
     Soup { positions, corner_verts, face_sizes }
 }
+
+/// Every method with every boundary / solver variant, the iterative ones capped at
+/// `iterations` (scaffold at half of it) and spectral at `spectral_iterations`.
+pub fn every_method(iterations: usize, spectral_iterations: usize) -> Vec<uvflat_core::Method> {
+    use uvflat_core::methods::{abf, arap, mips, scaffold, slim};
+    use uvflat_core::{BoundaryShape, Method, SpectralOptions};
+    let mut v = Vec::new();
+    for b in [BoundaryShape::Circle, BoundaryShape::Square, BoundaryShape::Virtual] {
+        v.push(Method::Tutte { boundary: b });
+        v.push(Method::Harmonic { boundary: b });
+        v.push(Method::MeanValue { boundary: b });
+    }
+    v.extend([
+        Method::Lscm,
+        Method::Spectral(SpectralOptions { max_iterations: spectral_iterations, ..Default::default() }),
+        Method::Abf(abf::AbfOptions::default()),
+        Method::Abf(abf::AbfOptions { solver: abf::AbfSolver::Plain, ..Default::default() }),
+        Method::Abf(abf::AbfOptions { boundary: abf::AbfBoundary::Convex, ..Default::default() }),
+        Method::Arap(arap::ArapOptions { max_iterations: iterations, ..Default::default() }),
+        Method::Slim(slim::SlimOptions { max_iterations: iterations, ..Default::default() }),
+        Method::Mips(mips::MipsOptions { max_iterations: iterations, ..Default::default() }),
+        Method::Scaffold(scaffold::ScaffoldOptions { max_iterations: (iterations / 2).max(1), ..Default::default() }),
+    ]);
+    v
+}
