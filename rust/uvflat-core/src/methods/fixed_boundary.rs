@@ -393,16 +393,7 @@ fn laplacian_triplets_triangles(positions: &[[f64; 3]], triangles: &[[u32; 3]], 
         }
         Weights::MeanValue => {
             let angles = chart_angles(positions, triangles);
-            let mean_len = {
-                let (mut s, mut n) = (0.0, 0usize);
-                for t in triangles {
-                    for k in 0..3 {
-                        s += norm(sub(positions[t[(k + 1) % 3] as usize], positions[t[k] as usize]));
-                        n += 1;
-                    }
-                }
-                if n > 0 && s > 0.0 { s / n as f64 } else { 1.0 }
-            };
+            let mean_len = mean_edge(positions, triangles);
             let floor = 1e-12 * mean_len;
             for (t, a) in triangles.iter().zip(&angles) {
                 for k in 0..3 {
