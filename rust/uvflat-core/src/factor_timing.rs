@@ -5,6 +5,7 @@ use crate::charts::build_charts;
 use crate::error::Result;
 use crate::methods::fixed_boundary::{fill_holes, laplacian_triplets, Weights};
 use crate::methods::{chart_angles, lscm, require_disk, Method};
+use crate::solvers::ordering::OrderingKind;
 use crate::solvers::{FixedValueSolver, Symmetry};
 use crate::unwrap::MeshInput;
 
@@ -35,7 +36,7 @@ pub fn factorization_seconds(input: &MeshInput<'_>, method: &Method) -> Result<O
                 let trip = laplacian_triplets(&ext.positions, &ext.triangles, w);
                 let sym = if w == Weights::MeanValue { Symmetry::General } else { Symmetry::Symmetric };
                 let t = std::time::Instant::now();
-                let ok = FixedValueSolver::new(ext.positions.len(), &trip, &ext.outer, sym).is_ok();
+                let ok = FixedValueSolver::with_ordering(ext.positions.len(), &trip, &ext.outer, sym, OrderingKind::Amd).is_ok();
                 if ok {
                     total += t.elapsed().as_secs_f64();
                 }
@@ -45,7 +46,7 @@ pub fn factorization_seconds(input: &MeshInput<'_>, method: &Method) -> Result<O
                 let trip = lscm::conformal_hermitian(&chart.triangles, &angles);
                 let pins = lscm::auto_pins(&chart);
                 let t = std::time::Instant::now();
-                let ok = FixedValueSolver::new(chart.positions.len(), &trip, &[pins[0].0, pins[1].0], Symmetry::Symmetric).is_ok();
+                let ok = FixedValueSolver::with_ordering(chart.positions.len(), &trip, &[pins[0].0, pins[1].0], Symmetry::Symmetric, OrderingKind::Amd).is_ok();
                 if ok {
                     total += t.elapsed().as_secs_f64();
                 }

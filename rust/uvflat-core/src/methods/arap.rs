@@ -35,6 +35,7 @@ use rayon::prelude::*;
 use super::nonlinear::iterate::{stopped_early_note, Change, Iteration};
 use super::{chart_angles, lscm, ChartFailure, ChartSolution};
 use crate::charts::Chart;
+use crate::solvers::ordering::OrderingKind;
 use crate::solvers::{FixedValueSolver, Symmetry};
 
 pub use super::nonlinear::energy::arap_energy;
@@ -88,7 +89,7 @@ pub fn solve_with_history(
     let fixed = super::nonlinear::pins::anchors(pins, &uv);
     let fixed_ids: Vec<u32> = fixed.iter().map(|p| p.0).collect();
     let fixed_vals = [fixed.iter().map(|p| p.1[0]).collect::<Vec<f64>>(), fixed.iter().map(|p| p.1[1]).collect::<Vec<f64>>()];
-    let solver = FixedValueSolver::new(n, &trip, &fixed_ids, Symmetry::Symmetric)?;
+    let solver = FixedValueSolver::with_ordering(n, &trip, &fixed_ids, Symmetry::Symmetric, OrderingKind::Amd)?;
 
     let mut it = Iteration::new(arap_energy(&ops, tris, &uv), options.max_iterations, options.tolerance, Change::OfPrevious, 0.0);
     let mut stopped = None;

@@ -24,6 +24,7 @@ use super::{chart_angles, ChartFailure, ChartSolution};
 use crate::charts::{Chart, Polygon};
 use crate::geometry::{norm, sub};
 use crate::methods::BoundaryShape;
+use crate::solvers::ordering::OrderingKind;
 use crate::solvers::{FixedValueSolver, Symmetry};
 
 /// Edge weights of a barycentric method.
@@ -428,7 +429,7 @@ pub fn solve(
     let trip = laplacian_triplets_with_polygons(&ext.positions, &ext.triangles, &chart.polygons, weights);
     let symmetry = if weights == Weights::MeanValue { Symmetry::General } else { Symmetry::Symmetric };
     let bnd = boundary_positions(&ext.positions, &ext.outer, shape);
-    let solver = FixedValueSolver::new(n, &trip, &ext.outer, symmetry)?;
+    let solver = FixedValueSolver::with_ordering(n, &trip, &ext.outer, symmetry, OrderingKind::Amd)?;
     let cols = [bnd.iter().map(|p| p[0]).collect::<Vec<_>>(), bnd.iter().map(|p| p[1]).collect::<Vec<_>>()];
     let x = solver.solve(&cols, &[])?;
     // UVs of every vertex of the extended chart (chart vertices first, then hole centres and
@@ -463,7 +464,7 @@ pub fn solve(
                 vals.push(p);
             }
         }
-        let solver = FixedValueSolver::new(n, &trip, &fixed, symmetry)?;
+        let solver = FixedValueSolver::with_ordering(n, &trip, &fixed, symmetry, OrderingKind::Amd)?;
         let cols = [vals.iter().map(|p| p[0]).collect::<Vec<_>>(), vals.iter().map(|p| p[1]).collect::<Vec<_>>()];
         let x = solver.solve(&cols, &[])?;
         uv = (0..n).map(|i| [x[0][i], x[1][i]]).collect();

@@ -19,6 +19,7 @@
 
 use super::{chart_angles, ChartFailure, ChartSolution};
 use crate::charts::Chart;
+use crate::solvers::ordering::OrderingKind;
 use crate::solvers::{FixedValueSolver, Symmetry};
 use faer::c64;
 
@@ -135,7 +136,7 @@ impl LscmSolver {
     /// corner `angles` and `pinned` vertices (at least two, distinct).
     pub fn new(n: usize, triangles: &[[u32; 3]], angles: &[[f64; 3]], pinned: &[u32]) -> Result<Self, ChartFailure> {
         let trip = conformal_hermitian(triangles, angles);
-        let solver = FixedValueSolver::new(n, &trip, pinned, Symmetry::Symmetric)?;
+        let solver = FixedValueSolver::with_ordering(n, &trip, pinned, Symmetry::Symmetric, OrderingKind::Amd)?;
         Ok(LscmSolver { solver, pinned: pinned.to_vec(), n })
     }
 

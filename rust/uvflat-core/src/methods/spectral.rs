@@ -20,6 +20,7 @@
 use super::{chart_angles, lscm, ChartFailure, ChartSolution, SpectralOptions};
 use crate::charts::Chart;
 use crate::geometry::{norm, sub};
+use crate::solvers::ordering::OrderingKind;
 use crate::solvers::{FixedValueSolver, Symmetry};
 
 /// Map one chart.
@@ -65,7 +66,7 @@ pub fn solve(chart: &Chart, pins: &[(u32, [f64; 2])], options: &SpectralOptions)
         let eps = rel * mean_diag.max(f64::MIN_POSITIVE) / mean_b;
         let mut k = q.clone();
         k.extend((0..m as u32).filter(|&i| b[i as usize] > 0.0).map(|i| (i, i, eps * b[i as usize])));
-        if let Ok(f) = FixedValueSolver::new(m, &k, &[], Symmetry::Symmetric) {
+        if let Ok(f) = FixedValueSolver::with_ordering(m, &k, &[], Symmetry::Symmetric, OrderingKind::Amd) {
             factor = Some(f);
             break;
         }

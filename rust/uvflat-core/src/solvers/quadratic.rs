@@ -174,12 +174,34 @@ impl<T: Scalar> FixedValueSolver<T> {
     /// Preconditions: indices `< n`; `fixed` without duplicates. Failures:
     /// [`SolveError::NotPositiveDefinite`] / [`SolveError::Singular`] when `Q_FF` cannot be
     /// factored, [`SolveError::Other`] on allocation failure.
+    ///
+    /// The fill-reducing ordering is [`OrderingKind::Auto`], chosen for systems that are
+    /// refactored many times (nested dissection on large systems); a system factored once
+    /// should use [`FixedValueSolver::with_ordering`] with [`OrderingKind::Amd`].
     pub fn new(n: usize, triplets: &[(u32, u32, T)], fixed: &[u32], symmetry: Symmetry) -> Result<Self, SolveError> {
-        Self::new_with_dense_max(n, triplets, fixed, symmetry, DENSE_MAX)
+        Self::new_with_dense_max(n, triplets, fixed, symmetry, DENSE_MAX, OrderingKind::Auto)
     }
 
-    /// [`FixedValueSolver::new`], factoring dense up to `dense_max` free unknowns.
-    fn new_with_dense_max(n: usize, triplets: &[(u32, u32, T)], fixed: &[u32], symmetry: Symmetry, dense_max: usize) -> Result<Self, SolveError> {
+    /// [`FixedValueSolver::new`] with the given fill-reducing ordering of `Q_FF` (used by its
+    /// Cholesky factorization; the LU of [`Symmetry::General`] systems orders itself).
+    ///
+    /// Nested dissection costs more to compute than AMD and saves numeric work on every
+    /// factorization of a large system (see [`crate::solvers::ordering`]): for a system
+    /// factored once (LSCM, Tutte, harmonic, mean value) AMD is the faster choice at every
+    /// size measured.
+    pub fn with_ordering(n: usize, triplets: &[(u32, u32, T)], fixed: &[u32], symmetry: Symmetry, ordering: OrderingKind) -> Result<Self, SolveError> {
+        Self::new_with_dense_max(n, triplets, fixed, symmetry, DENSE_MAX, ordering)
+    }
+
+    /// [`FixedValueSolver::with_ordering`], factoring dense up to `dense_max` free unknowns.
+    fn new_with_dense_max(
+        n: usize,
+        triplets: &[(u32, u32, T)],
+        fixed: &[u32],
+        symmetry: Symmetry,
+        dense_max: usize,
+        ordering: OrderingKind,
+    ) -> Result<Self, SolveError> {
         let mut free_pos = vec![0u32; n];
         for &c in fixed {
             free_pos[c as usize] = u32::MAX;
@@ -241,7 +263,7 @@ impl<T: Scalar> FixedValueSolver<T> {
             Symmetry::Symmetric => {
                 let other = |e: &dyn std::fmt::Debug| SolveError::Other(format!("{e:?}"));
                 let a = ff_symbolic.as_ref();
-                let perm = fill_reducing(OrderingKind::Auto, nf, a.col_ptr(), a.row_idx()).map_err(|e| other(&e))?;
+                let perm = fill_reducing(ordering, nf, a.col_ptr(), a.row_idx()).map_err(|e| other(&e))?;
                 let perm_ref = faer::perm::PermRef::new_checked(&perm.fwd, &perm.inv, nf);
                 let symbolic = factorize_symbolic_cholesky(a, Side::Lower, SymmetricOrdering::Custom(perm_ref), Default::default())
                     .map_err(|e| other(&e))?;
@@ -449,8 +471,8 @@ mod tests {
                 let wgt = 1.0 + 0.1 * k as f64;
                 t.extend([(a, a, wgt), (c, c, wgt), (c, a, -wgt + skew), (a, c, -wgt - skew)]);
             }
-            let dense = FixedValueSolver::new_with_dense_max(n, &t, &fixed, sym, usize::MAX).unwrap();
-            let sparse = FixedValueSolver::new_with_dense_max(n, &t, &fixed, sym, 0).unwrap();
+            let dense = FixedValueSolver::new_with_dense_max(n, &t, &fixed, sym, usize::MAX, OrderingKind::Auto).unwrap();
+            let sparse = FixedValueSolver::new_with_dense_max(n, &t, &fixed, sym, 0, OrderingKind::Auto).unwrap();
             assert!(matches!(dense.symbolic, Symbolic::Dense) && !matches!(sparse.symbolic, Symbolic::Dense));
             let (xd, xs) = (dense.solve(&fixed_values, &b).unwrap(), sparse.solve(&fixed_values, &b).unwrap());
             for i in 0..n {
@@ -465,8 +487,8 @@ mod tests {
             t.extend([(a, a, faer::c64::new(wgt, 0.0)), (c, c, faer::c64::new(wgt, 0.0)), (lo, hi, faer::c64::new(-0.9 * wgt, 0.2))]);
         }
         let fv = vec![vec![faer::c64::new(1.0, 1.0), faer::c64::new(0.0, -1.0), faer::c64::new(2.0, 0.0)]];
-        let dense = FixedValueSolver::new_with_dense_max(n, &t, &fixed, Symmetry::Symmetric, usize::MAX).unwrap();
-        let sparse = FixedValueSolver::new_with_dense_max(n, &t, &fixed, Symmetry::Symmetric, 0).unwrap();
+        let dense = FixedValueSolver::new_with_dense_max(n, &t, &fixed, Symmetry::Symmetric, usize::MAX, OrderingKind::Auto).unwrap();
+        let sparse = FixedValueSolver::new_with_dense_max(n, &t, &fixed, Symmetry::Symmetric, 0, OrderingKind::Auto).unwrap();
         let (xd, xs) = (dense.solve(&fv, &[]).unwrap(), sparse.solve(&fv, &[]).unwrap());
         for i in 0..n {
             let d = xd[0][i] - xs[0][i];
@@ -476,7 +498,7 @@ mod tests {
         let lap: Vec<(u32, u32, f64)> = edges.iter().flat_map(|&(a, c)| [(a, a, 1.0), (c, c, 1.0), (c, a, -1.0), (a, c, -1.0)]).collect();
         for dense_max in [0, usize::MAX] {
             for sym in [Symmetry::Symmetric, Symmetry::General] {
-                assert!(FixedValueSolver::new_with_dense_max(n + 1, &lap, &[0], sym, dense_max).is_err(), "{sym:?} {dense_max}");
+                assert!(FixedValueSolver::new_with_dense_max(n + 1, &lap, &[0], sym, dense_max, OrderingKind::Auto).is_err(), "{sym:?} {dense_max}");
             }
         }
     }
