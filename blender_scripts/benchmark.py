@@ -29,7 +29,10 @@ the large disks).
 (read, solve, quality = the core's per-face distortion measure, write, pack = the packing,
 mode = edit/object mode switches, other = the rest of the operator call), taken from the
 engine's ``Summary.phases``; "other" also holds the operator call's own overhead, so the
-phases add up to the ``seconds`` column (of the same run; medians may not add up exactly).  ``peak MB`` is the process's peak resident memory so far
+phases add up to the ``seconds`` column (of the same run; medians may not add up exactly).
+``floor × family`` is the "× family" ratio a solve of zero seconds would leave: uvflat's
+seconds outside the solve (reading, quality, writing, Blender's packer, mode switches) over
+the Blender method's seconds; no speed-up of the core can take "× family" below it.  ``peak MB`` is the process's peak resident memory so far
 (``resource.getrusage``; it only grows, so read it in run order), ``threads`` the size of the
 core's thread pool (``--threads N`` sets ``RAYON_NUM_THREADS`` before the core is loaded).
 
@@ -227,12 +230,12 @@ def fmt(value, spec):
 
 
 def table(results, threads, show_phases=False):
-    phase_head = "".join(f" {p} s |" for p in PHASES) if show_phases else ""
+    phase_head = ("".join(f" {p} s |" for p in PHASES) + " floor × family |") if show_phases else ""
     head = ("| mesh | faces | method | seconds | × CONFORMAL | × family | unsolved faces | charts "
             "| flips | overlapping | conformal | area | sym. Dirichlet | factor s |" + phase_head
             + " peak MB | threads | note |")
     lines = [head, "|" + "---|" * (head.count("|") - 1)]
-    dashes = " – |" * (len(PHASES) if show_phases else 0)
+    dashes = " – |" * (len(PHASES) + 1 if show_phases else 0)
     for mesh_name, n_faces, rows in results:
         by_method = {r["method"]: r for r in rows if r["kind"] == "blender"}
         for r in rows:
@@ -249,8 +252,12 @@ def table(results, threads, show_phases=False):
             factor = r.get("factor")
             note = r.get("note") or r.get("metrics_error") or r.get("factor_error") or ""
             ph = r.get("phases")
+            # The smallest "× family" a solve of zero seconds would leave: everything the
+            # operator does besides the solve, over the Blender method's whole time.
+            floor = ((r["seconds"] - ph.get("solve", 0.0)) / fam
+                     if ph and fam and r["kind"] == "uvflat" else None)
             phase_cells = ("".join(f" {fmt(ph.get(p) if ph else None, '.4f')} |" for p in PHASES)
-                           if show_phases else "")
+                           + f" {fmt(floor, '.3f')} |" if show_phases else "")
             lines.append(
                 f"| {mesh_name} | {n_faces} | {label} | {r['seconds']:.4f} | {ratio} | {fam_ratio} "
                 f"| {r.get('unsolved', '–')} | {r.get('charts', '–')} | {r.get('flips', '–')} "

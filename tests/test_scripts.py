@@ -346,3 +346,30 @@ def test_batch_unwrap_rejects_a_broken_mesh_file_naming_the_element(tmp_path, su
     r = _run(src, out)
     _one_line_error(r, str(src), needle)
     assert not out.exists()
+
+
+def test_benchmark_floor_is_the_ratio_a_zero_second_solve_would_leave():
+    """The benchmark's ``floor × family`` column: uvflat's seconds outside the solve over the
+    Blender method's seconds, for uvflat rows only."""
+    sys.path.insert(0, str(REPO / "blender_scripts"))
+    import benchmark
+
+    phases = {"read": 0.01, "solve": 0.3, "quality": 0.0, "write": 0.02, "pack": 0.05,
+              "mode": 0.02, "other": 0.0}
+    rows = [
+        {"kind": "blender", "method": "ANGLE_BASED", "seconds": 2.0, "error": None},
+        {"kind": "blender", "method": "CONFORMAL", "seconds": 1.0, "error": None},
+        {"kind": "uvflat", "method": "abf", "seconds": 0.4, "error": None, "phases": phases},
+        {"kind": "uvflat", "method": "lscm", "seconds": 0.4, "error": None, "phases": phases},
+    ]
+    text = benchmark.table([("m", 10, rows)], 2, show_phases=True)
+    lines = text.splitlines()
+    head = [c.strip() for c in lines[0].strip("|").split("|")]
+    col = head.index("floor × family")
+    cells = {line.split("|")[3].strip(): [c.strip() for c in line.strip("|").split("|")]
+             for line in lines[2:]}
+    assert float(cells["abf"][col]) == pytest.approx((0.4 - 0.3) / 2.0, abs=1e-3)
+    assert float(cells["lscm"][col]) == pytest.approx((0.4 - 0.3) / 1.0, abs=1e-3)
+    assert cells["Blender ANGLE_BASED"][col] == "–"
+    # Every row has as many cells as the header.
+    assert all(len(c) == len(head) for c in cells.values())
