@@ -83,24 +83,26 @@ pub fn fill_reducing(kind: OrderingKind, n: usize, col_ptr: &[usize], row_idx: &
         // No ordering can change the fill of a 1×1 or 2×2 factor (one-triangle charts).
         return Ok(Permutation::from_fwd((0..n).collect()));
     }
-    let graph = Graph::from_pattern(n, col_ptr, row_idx);
-    match kind.resolve(n) {
-        OrderingKind::NestedDissection => {
-            // Unknowns with identical closed neighbourhoods (the u and v of one vertex in a
-            // 2×2-block system) are one supervariable: dissect the smaller quotient graph.
-            let Some((quotient, members)) = graph.compress() else {
-                return nested_dissection(&graph);
-            };
-            let order = nested_dissection(&quotient)?;
-            let fwd = order.fwd.iter().flat_map(|&sv| members.list[members.ptr[sv]..members.ptr[sv + 1]].iter().copied()).collect();
-            Ok(Permutation::from_fwd(fwd))
-        }
-        _ => {
-            let all: Vec<usize> = (0..n).collect();
-            let mut local = vec![usize::MAX; n];
-            Ok(Permutation::from_fwd(amd_of_subset(&graph, &all, &mut local)?))
-        }
+    if kind.resolve(n) == OrderingKind::Amd {
+        // faer's AMD orders the pattern of A + Aᵀ itself (either triangle or both, unsorted,
+        // diagonal ignored): no adjacency copy is needed.
+        let a = faer::sparse::SymbolicSparseColMatRef::new_checked(n, n, col_ptr, None, row_idx);
+        let (mut fwd, mut inv) = (vec![0usize; n], vec![0usize; n]);
+        let mut mem = faer::dyn_stack::MemBuffer::try_new(faer::sparse::linalg::amd::order_maybe_unsorted_scratch::<usize>(n, row_idx.len()))
+            .map_err(|_| FaerError::OutOfMemory)?;
+        faer::sparse::linalg::amd::order_maybe_unsorted(&mut fwd, &mut inv, a, Default::default(), faer::dyn_stack::MemStack::new(&mut mem))?;
+        return Ok(Permutation { fwd, inv });
     }
+    let graph = Graph::from_pattern(n, col_ptr, row_idx);
+    // Unknowns with identical closed neighbourhoods (the u and v of one vertex in a 2×2-block
+    // system) are one supervariable: dissect the smaller quotient graph.
+    let Some((quotient, members)) = graph.compress() else {
+        return nested_dissection(&graph);
+    };
+    drop(graph);
+    let order = nested_dissection(&quotient)?;
+    let fwd = order.fwd.iter().flat_map(|&sv| members.list[members.ptr[sv]..members.ptr[sv + 1]].iter().copied()).collect();
+    Ok(Permutation::from_fwd(fwd))
 }
 
 /// The members of every supervariable of [`Graph::compress`], compressed: supervariable `s`
