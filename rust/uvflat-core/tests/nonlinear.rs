@@ -69,7 +69,8 @@ fn slim_never_flips_on_shared_meshes_and_synthetic_disks() {
                 disks += 1;
                 assert_eq!(c.status, ChartStatus::Solved, "{name}: chart {}: {:?}", c.id, c.reason);
                 assert_eq!(c.flips, 0, "{name}: chart {} ({} faces) flips", c.id, c.faces);
-                assert!(c.iterations >= 1, "{name}: chart {}", c.id);
+                // No iteration only when the start is already an isometry (the minimum).
+                assert!(c.iterations >= 1 || c.distortion.symmetric_dirichlet <= 1.0 + 1e-9, "{name}: chart {}", c.id);
                 assert!(c.distortion.symmetric_dirichlet.is_finite() && c.distortion.symmetric_dirichlet >= 1.0 - 1e-9);
             }
         }

@@ -72,6 +72,7 @@ use super::nonlinear::pattern::{block_triplets, interleaved, BLOCK};
 use super::nonlinear::pins::{anchors, translate_onto_first_pin};
 use super::nonlinear::proxy::reweight;
 use super::nonlinear::start;
+use super::nonlinear::unfold::unfold;
 use super::nonlinear::TriangleOperators;
 use super::{lscm, ChartFailure, ChartSolution, Fallback};
 use crate::charts::Chart;
@@ -140,7 +141,7 @@ pub struct SlimHistory {
     /// numeric factorisation, solve, line search]`. The first iteration's factorisation
     /// includes the symbolic analysis.
     pub seconds: Vec<[f64; 4]>,
-    /// Name of the starting map ("lscm" or "mean_value").
+    /// Name of the starting map ("unfold", "lscm" or "mean_value").
     pub start: &'static str,
     /// Seconds spent computing and checking the starting maps.
     pub start_seconds: f64,
@@ -196,30 +197,38 @@ fn pick_start(chart: &Chart, pins: &[(u32, [f64; 2])], ops: &TriangleOperators, 
     let tris = &chart.triangles;
     let spanning = lscm::pins_span(pins);
     let start_pins: &[(u32, [f64; 2])] = if spanning { pins } else { &[] };
-    let (candidates, mut rejected) = start::candidate_starts(chart, start_pins, options.start == SlimStart::Auto);
-    let best = start::pick(
-        chart,
-        candidates,
-        &mut rejected,
-        |uv| {
-            if !spanning {
-                scale_optimally(ops, tris, uv);
-                translate_onto_first_pin(uv, pins);
+    let mut prepare = |uv: &mut Vec<[f64; 2]>| {
+        if !spanning {
+            scale_optimally(ops, tris, uv);
+            translate_onto_first_pin(uv, pins);
+        }
+    };
+    let mut assess = |uv: &[[f64; 2]]| {
+        let e = symmetric_dirichlet(ops, tris, uv);
+        if all_positive(tris, uv) && e.is_finite() {
+            return Ok(e);
+        }
+        let bad = tris.iter().filter(|t| {
+            let (p0, p1, p2) = (uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]);
+            let a = (p1[0] - p0[0]) * (p2[1] - p0[1]) - (p1[1] - p0[1]) * (p2[0] - p0[0]);
+            a <= 0.0 || a.is_nan()
+        });
+        Err(format!("{} flipped or degenerate triangle(s)", bad.count()))
+    };
+    // A chart without interior vertices unfolds isometrically, the energy's global minimiser
+    // ([`unfold`]): no other start is computed unless a quad of it is not convex. Not used
+    // when pins constrain the map's shape, nor when the mean value start is asked for.
+    let mut rejected = Vec::new();
+    if let Some(uv) = if spanning || options.start != SlimStart::Auto { None } else { unfold(chart) } {
+        if let Some(best) = start::pick(chart, vec![(uv, "unfold")], &mut rejected, &mut prepare, &mut assess) {
+            if super::nonconvex_quads(chart, &best.0) == 0 {
+                return (Some(best), rejected);
             }
-        },
-        |uv| {
-            let e = symmetric_dirichlet(ops, tris, uv);
-            if all_positive(tris, uv) && e.is_finite() {
-                return Ok(e);
-            }
-            let bad = tris.iter().filter(|t| {
-                let (p0, p1, p2) = (uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]);
-                let a = (p1[0] - p0[0]) * (p2[1] - p0[1]) - (p1[1] - p0[1]) * (p2[0] - p0[0]);
-                a <= 0.0 || a.is_nan()
-            });
-            Err(format!("{} flipped or degenerate triangle(s)", bad.count()))
-        },
-    );
+        }
+    }
+    let (candidates, more) = start::candidate_starts(chart, start_pins, options.start == SlimStart::Auto);
+    rejected.extend(more);
+    let best = start::pick(chart, candidates, &mut rejected, &mut prepare, &mut assess);
     (best, rejected)
 }
 
@@ -280,7 +289,10 @@ pub fn solve_with_history(
     let (mut newton_steps, mut newton_failed) = (0usize, false);
     let zero_fixed = vec![vec![0.0; fixed_ids.len()]];
     let mut newton = false;
-    while it.go_on() {
+    // A start at energy 1 (every triangle isometric, e.g. `unfold`; the energy is normalised) is
+    // the global minimiser: there is nothing to iterate.
+    let isometric = it.energy() <= 1.0 + 1e-12;
+    while !isometric && it.go_on() {
         let t0 = Instant::now();
         if newton {
             // Projected Newton step (module docs): same pattern, same factorization analysis.

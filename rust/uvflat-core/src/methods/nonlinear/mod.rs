@@ -26,5 +26,6 @@ pub mod pattern;
 pub mod pins;
 pub mod proxy;
 pub mod start;
+pub mod unfold;
 
 pub use jacobian::{Jacobian, TriangleOperators};
