@@ -42,13 +42,16 @@ fn main() {
     let opts = AbfOptions::default();
     if mode == "profile" {
         // Only `abf::solve` on every chart, `repeats` times (for perf).
-        let t = Instant::now();
+        let mut cpu = Vec::new();
         for _ in 0..repeats {
+            let c0 = cpu_seconds();
             for c in charts.iter().filter(|c| c.defect.is_none() && !c.boundary_loops.is_empty()) {
                 std::hint::black_box(abf::solve(c, &[], &opts).expect("solve"));
             }
+            cpu.push(cpu_seconds() - c0);
         }
-        println!("abf::solve on every chart: {:.4} s per pass", t.elapsed().as_secs_f64() / repeats as f64);
+        cpu.sort_by(f64::total_cmp);
+        println!("abf::solve on every chart: cpu median {:.4} s per pass (min {:.4})", cpu[cpu.len() / 2], cpu[0]);
         return;
     }
     println!("{} faces, {} seams, {} charts", s.face_sizes.len(), seams.len(), charts.len());
