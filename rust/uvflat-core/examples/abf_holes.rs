@@ -7,7 +7,10 @@
 //!
 //! SEAMS.txt holds one seam edge per line, two vertex indices (e.g. the seams Blender's Smart
 //! UV Project makes on camelhead, marked from its islands and saved with `numpy.savetxt`).
-//! Per-chart lines are printed for charts with holes (`all`: every chart). Set
+//! Per-chart lines are printed for charts with holes (`all`: every chart): Newton iterations,
+//! factorizations, seconds (fastest of five), flipped triangles, boundary crossing and outer
+//! loop crossing itself of each map, the ABF energy Σ ((α − β)/β)² of each, and what
+//! `abf::solve` chose. Set
 //! `RAYON_NUM_THREADS=1` for CPU-time comparisons on a shared machine. `profile`: only
 //! `abf::solve` on every chart, REPEATS times (for `perf record`).
 #[path = "../tests/common/mod.rs"]
@@ -55,7 +58,9 @@ fn main() {
         return;
     }
     println!("{} faces, {} seams, {} charts", s.face_sizes.len(), seams.len(), charts.len());
-    println!("chart  tris holes | open: it fact  s      flips ovl | filled: it fact  s      flips ovl | solve(): s     note");
+    println!(
+        "chart  tris holes | open: it fact  s      flips ovl outer | filled: it fact  s      flips ovl outer | energy open filled | layout s folds s | solve(): s     note"
+    );
     let (mut t_open, mut t_filled, mut t_solve) = (0.0, 0.0, 0.0);
     let (mut n_folded, mut n_holed) = (0, 0);
     for (i, c) in charts.iter().enumerate() {
@@ -63,49 +68,50 @@ fn main() {
             continue;
         }
         let holes = c.boundary_loops.len() - 1;
-        let folds = |uv: &[[f64; 2]]| (count_flips(&c.triangles, uv), boundary_self_overlap(uv, &c.boundary_loops));
+        let outer = c.outer_loop().expect("a boundary");
+        // Flipped triangles, any boundary crossing, the outer loop crossing itself.
+        let folds = |uv: &[[f64; 2]]| {
+            let outer_crosses = boundary_self_overlap(uv, &c.boundary_loops[outer..=outer]);
+            (count_flips(&c.triangles, uv), boundary_self_overlap(uv, &c.boundary_loops), outer_crosses)
+        };
+        let beta = abf::target_angles(c);
+        let energy = |a: &[[f64; 3]]| a.iter().flatten().zip(beta.iter().flatten()).map(|(x, y)| ((x - y) / y).powi(2)).sum::<f64>();
         let (d_open, open) = fastest(|| abf::solve_angles(c, &opts).expect("open solve"));
         let (d_lay, (uv, _)) = fastest(|| lscm::solve_with_angles(c, &open.alpha, &[]).expect("layout"));
         let (d_folds, f_open) = fastest(|| folds(&uv));
+        // The filled solve (it may fail: a reduced system that is not positive definite).
         let filled = fixed_boundary::filled_chart(c);
-        let (d_filled, fa) = fastest(|| abf::solve_angles(&filled, &opts).expect("filled solve"));
-        let alpha = &fa.alpha[..c.triangles.len()];
-        let (uv, _) = lscm::solve_with_angles(c, alpha, &[]).expect("layout");
-        let f_filled = folds(&uv);
-        if holes > 0 || all {
-            eprintln!("chart {i}: layout {d_lay:.4} s, folds check {d_folds:.4} s");
-        }
-        if holes > 0 {
-            let outer = c.outer_loop().unwrap();
-            let only_outer = boundary_self_overlap(&uv, &c.boundary_loops[outer..=outer]);
-            let (uvo, _) = lscm::solve_with_angles(c, &open.alpha, &[]).expect("layout");
-            let open_outer = boundary_self_overlap(&uvo, &c.boundary_loops[outer..=outer]);
-            let holes_only: Vec<Vec<u32>> = c.boundary_loops.iter().enumerate().filter(|(l, _)| *l != outer).map(|(_, x)| x.clone()).collect();
-            let open_holes = boundary_self_overlap(&uvo, &holes_only);
-            let energy = |a: &[[f64; 3]], b: &[[f64; 3]]| a.iter().flatten().zip(b.iter().flatten()).map(|(x, y)| ((x - y) / y).powi(2)).sum::<f64>();
-            let beta = abf::target_angles(c);
-            eprintln!("chart {i}: outer-only overlap open {open_outer} filled {only_outer}; hole loops overlap (open) {open_holes}; energy open {:.4e} filled {:.4e}", energy(&open.alpha, &beta), energy(alpha, &beta));
-        }
+        let (d_filled, fa) = fastest(|| abf::solve_angles(&filled, &opts).ok());
+        let filled_row = match &fa {
+            Some(fa) => {
+                let alpha = &fa.alpha[..c.triangles.len()];
+                let (uv, _) = lscm::solve_with_angles(c, alpha, &[]).expect("layout");
+                let f = folds(&uv);
+                let e = energy(alpha);
+                (format!("{:3} {:3} {d_filled:.4} {:5} {:5} {:5}", fa.iterations, fa.factorizations, f.0, f.1, f.2), e)
+            }
+            None => ("failed".to_string(), f64::NAN),
+        };
         let (d_solve, sol) = fastest(|| abf::solve(c, &[], &opts).expect("solve"));
         t_solve += d_solve;
         if holes > 0 {
             n_holed += 1;
             t_open += d_open;
             t_filled += d_filled;
-            n_folded += usize::from(f_open != (0, false));
+            n_folded += usize::from((f_open.0, f_open.1) != (0, false));
         }
         if holes > 0 || all {
             println!(
-                "{i:5} {:5} {holes:5} | {:3} {:3} {d_open:.4} {:5} {:5} | {:3} {:3} {d_filled:.4} {:5} {:5} | {d_solve:.4} {:?}",
+                "{i:5} {:5} {holes:5} | {:3} {:3} {d_open:.4} {:5} {:5} {:5} | {} | {:.3e} {:.3e} | {d_lay:.4} {d_folds:.4} | {d_solve:.4} {:?}",
                 c.triangles.len(),
                 open.iterations,
                 open.factorizations,
                 f_open.0,
                 f_open.1,
-                fa.iterations,
-                fa.factorizations,
-                f_filled.0,
-                f_filled.1,
+                f_open.2,
+                filled_row.0,
+                energy(&open.alpha),
+                filled_row.1,
                 sol.note.as_deref().map(|n| &n[..n.len().min(60)])
             );
         }
