@@ -63,6 +63,9 @@ fn main() {
     );
     let (mut t_open, mut t_filled, mut t_solve) = (0.0, 0.0, 0.0);
     let (mut n_folded, mut n_holed) = (0, 0);
+    // Deterministic work: [angle solves, Newton steps, factorizations] of every chart's open
+    // solve, plus the filled solve where any fold triggers it and where `filling_may_help` does.
+    let (mut work_any_fold, mut work_may_help) = ([0usize; 3], [0usize; 3]);
     for (i, c) in charts.iter().enumerate() {
         if c.defect.is_some() || c.boundary_loops.is_empty() {
             continue;
@@ -94,6 +97,14 @@ fn main() {
         };
         let (d_solve, sol) = fastest(|| abf::solve(c, &[], &opts).expect("solve"));
         t_solve += d_solve;
+        let open_work = [1, open.iterations, open.factorizations];
+        let filled_work = fa.as_ref().map_or([1, 0, 0], |fa| [1, fa.iterations, fa.factorizations]);
+        let any_fold = holes > 0 && (f_open.0, f_open.1) != (0, false);
+        let may_help = holes > 0 && lscm::filling_may_help(c, &uv, (f_open.0, f_open.1));
+        for k in 0..3 {
+            work_any_fold[k] += open_work[k] + if any_fold { filled_work[k] } else { 0 };
+            work_may_help[k] += open_work[k] + if may_help { filled_work[k] } else { 0 };
+        }
         if holes > 0 {
             n_holed += 1;
             t_open += d_open;
@@ -118,6 +129,9 @@ fn main() {
     }
     println!(
         "holed charts {n_holed} (open layout folds on {n_folded}): open {t_open:.4} s, filled {t_filled:.4} s; abf::solve on all charts {t_solve:.4} s"
+    );
+    println!(
+        "[angle solves, Newton steps, factorizations]: filled solve on any fold {work_any_fold:?}, filled solve where it may help {work_may_help:?}"
     );
     let options = UnwrapOptions { method: Method::Abf(opts), ..Default::default() };
     let input = uvflat_core::MeshInput { seams: &seams, ..s.input() };
