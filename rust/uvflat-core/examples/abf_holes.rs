@@ -7,6 +7,19 @@
 //!
 //! SEAMS.txt holds one seam edge per line, two vertex indices (e.g. the seams Blender's Smart
 //! UV Project makes on camelhead, marked from its islands and saved with `numpy.savetxt`).
+//! With the `bpy` module and `blender_scripts/` on `sys.path` (as `benchmark.py` cuts
+//! `camelhead_smart`):
+//!
+//! ```text
+//! import common, benchmark, numpy as np
+//! common.reset_scene(); common.load_addon()
+//! obj = benchmark.smart_cut(common.load_mesh_object(common.SHARED_MESHES / "camelhead.off"))
+//! me = obj.data; ev = np.zeros(2 * len(me.edges), int); me.edges.foreach_get("vertices", ev)
+//! seam = np.zeros(len(me.edges), bool); me.edges.foreach_get("use_seam", seam)
+//! np.savetxt("/tmp/camelhead_smart_seams.txt", ev.reshape(-1, 2)[seam], fmt="%d")
+//! ```
+//!
+//! (an OFF file keeps its vertex order in Blender, so the indices are the file's).
 //! Per-chart lines are printed for charts with holes (`all`: every chart): Newton iterations,
 //! factorizations, seconds (fastest of five), flipped triangles, boundary crossing and outer
 //! loop crossing itself of each map, the ABF energy Σ ((α − β)/β)² of each, and what
