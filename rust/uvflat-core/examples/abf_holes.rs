@@ -23,9 +23,10 @@
 //! Per-chart lines are printed for charts with holes (`all`: every chart): Newton iterations,
 //! factorizations, seconds (fastest of five), flipped triangles, boundary crossing and outer
 //! loop crossing itself of each map, the ABF energy Σ ((α − β)/β)² of each, and what
-//! `abf::solve` chose. Set
-//! `RAYON_NUM_THREADS=1` for CPU-time comparisons on a shared machine. `profile`: only
-//! `abf::solve` on every chart, REPEATS times (for `perf record`).
+//! `abf::solve` chose; then the angle solves, Newton steps and factorizations of all charts
+//! with the filled solve run on any fold and only where it may help. Set `RAYON_NUM_THREADS=1`
+//! for CPU-time comparisons on a shared machine. `profile`: only `abf::solve` on every chart,
+//! REPEATS times (for `perf record`).
 #[path = "../tests/common/mod.rs"]
 mod common;
 
