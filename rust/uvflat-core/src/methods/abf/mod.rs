@@ -113,7 +113,10 @@
 //! a self-crossing outline), [`solve`] solves the angles again with every hole filled by a
 //! virtual fan ([`super::fixed_boundary::filled_chart`]) whose centre carries the interior
 //! constraints, so the holes close up and the layout is exact, and keeps that map if it folds
-//! less (the note says so). A prescribed sum at a hole vertex keeps the holes open.
+//! less (the note says so). The second solve is skipped when it cannot fold less: no flipped
+//! triangle and the outer loop itself crossing ([`lscm::filling_may_help`]; a filled solve
+//! often costs several times the open one, and filled holes distort the chart far more, so
+//! the holes are not filled first). A prescribed sum at a hole vertex keeps the holes open.
 //!
 //! Files: `problem.rs` (constraint rows and the Lagrangian's evaluation), `reduced.rs`
 //! (ABF++'s reduced system), `newton.rs` (the Newton / interior-point iteration), `angles.rs`
@@ -452,8 +455,9 @@ pub fn solve_with_sums(
                 let (uv, note) = lscm::solve_with_angles(chart, &a.alpha, pins)?;
                 let open_holes = options.boundary == AbfBoundary::Free && chart.boundary_loops.len() > 1;
                 let open = if open_holes { lscm::folds(chart, &uv) } else { (0, false) };
-                if open != (0, false) && prescribed_on_hole(chart, prescribed).is_none() {
-                    // The open holes folded: close them (module docs) and keep that if better.
+                if lscm::filling_may_help(chart, &uv, open) && prescribed_on_hole(chart, prescribed).is_none() {
+                    // The open holes folded in a way closing them can mend: close them
+                    // (module docs) and keep that if better.
                     if let Ok(b) = solve_angles_holes_filled(chart, options, prescribed) {
                         if b.converged && b.alpha.iter().flatten().all(|&x| x > 0.0 && x < PI) {
                             let (closed_uv, closed_note) = lscm::solve_with_angles(chart, &b.alpha, pins)?;

@@ -29,18 +29,23 @@ pub(super) struct FaceRows {
     pub(super) rows: [(u32, bool, u8); MAX_FACE_ROWS],
 }
 
-/// The rows' gradient on the triangle's three corners.
+/// The rows' gradient on the triangle's three corners: the sum row of corner k is `e_k`; the
+/// wheel row of corner k, `log sin α_{k+2} − log sin α_{k+1}`, has `−cot α_{k+1}` at k+1
+/// and `cot α_{k+2}` at k+2.
+///
+/// Written out per case so that the whole array is built at once: storing single entries at
+/// computed positions and then reading the array as a vector stalls the processor's store
+/// forwarding in the hot loops of the Newton step.
 #[inline]
 pub(super) fn row_grad(wheel: bool, k: usize, cot: &[f64; 3]) -> [f64; 3] {
-    let mut g = [0.0; 3];
-    if wheel {
-        // log sin α_{k+2} − log sin α_{k+1}
-        g[(k + 1) % 3] = -cot[(k + 1) % 3];
-        g[(k + 2) % 3] = cot[(k + 2) % 3];
-    } else {
-        g[k] = 1.0;
+    match (wheel, k) {
+        (false, 0) => [1.0, 0.0, 0.0],
+        (false, 1) => [0.0, 1.0, 0.0],
+        (false, _) => [0.0, 0.0, 1.0],
+        (true, 0) => [0.0, -cot[1], cot[2]],
+        (true, 1) => [cot[0], 0.0, -cot[2]],
+        (true, _) => [-cot[0], cot[1], 0.0],
     }
-    g
 }
 
 /// Below this many triangles a chart's per-triangle loops run sequentially (charts themselves
