@@ -189,8 +189,8 @@ pub fn solve_with_angles(
 /// LSCM with the chart's 3D angles.
 ///
 /// A chart with holes is solved with its holes open (free boundaries, as in the paper). When
-/// that map folds at all (a flipped triangle, or a boundary loop crossing itself), the chart
-/// is solved again with every hole filled by a virtual fan
+/// that map folds in a way closing the holes can mend ([`filling_may_help`]: a flipped
+/// triangle, or a crossing that involves a hole), the chart is solved again with every hole filled by a virtual fan
 /// ([`super::fixed_boundary::filled_chart`], as Blender's own unwrapper fills holes), and the
 /// filled solution is kept when it folds less (fewer flipped triangles, then no overlap); the
 /// report's note says so.
@@ -199,7 +199,7 @@ pub fn solve(chart: &Chart, pins: &[(u32, [f64; 2])]) -> Result<ChartSolution, C
     let (uv, note) = solve_with_angles(chart, &angles, pins)?;
     if chart.boundary_loops.len() > 1 {
         let open = folds(chart, &uv);
-        if open != (0, false) {
+        if filling_may_help(chart, &uv, open) {
             let filled = super::fixed_boundary::filled_chart(chart);
             let filled_angles = chart_angles(&filled.positions, &filled.triangles);
             if let Ok((mut closed_uv, closed_note)) = solve_with_angles(&filled, &filled_angles, pins) {
