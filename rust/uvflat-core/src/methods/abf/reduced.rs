@@ -12,9 +12,9 @@ use super::*;
 /// once per constraint set, and for every triangle the entries its pairs of rows sum into, so
 /// that every Newton step sums straight into a fixed value array (count, fill, sort and
 /// deduplicate each column, then look every pair up).
-pub(super) fn reduced_pattern(m: usize, face_rows: &[FaceRows]) -> (Vec<usize>, Vec<usize>, Vec<u32>, Vec<u32>) {
+pub(super) fn reduced_pattern(m: usize, nf: usize, face_rows: impl Fn(usize) -> FaceRows) -> (Vec<usize>, Vec<usize>, Vec<u32>, Vec<u32>) {
     let mut count = vec![0usize; m + 1];
-    for fr in face_rows {
+    for fr in (0..nf).map(&face_rows) {
         for i in 0..fr.len as usize {
             for j in 0..=i {
                 let (a, b) = (fr.rows[i].0, fr.rows[j].0);
@@ -27,7 +27,7 @@ pub(super) fn reduced_pattern(m: usize, face_rows: &[FaceRows]) -> (Vec<usize>, 
     }
     let mut fill = count.clone();
     let mut cols = vec![0u32; count[m]];
-    for fr in face_rows {
+    for fr in (0..nf).map(&face_rows) {
         for i in 0..fr.len as usize {
             for j in 0..=i {
                 let (a, b) = (fr.rows[i].0, fr.rows[j].0);
@@ -54,8 +54,8 @@ pub(super) fn reduced_pattern(m: usize, face_rows: &[FaceRows]) -> (Vec<usize>, 
         col_ptr[r + 1] = row_idx.len();
     }
     let mut slots = Vec::with_capacity(count[m]);
-    let mut slot_start = Vec::with_capacity(face_rows.len() + 1);
-    for fr in face_rows {
+    let mut slot_start = Vec::with_capacity(nf + 1);
+    for fr in (0..nf).map(&face_rows) {
         slot_start.push(slots.len() as u32);
         for i in 0..fr.len as usize {
             for j in 0..=i {
