@@ -28,10 +28,13 @@ pub fn solve(chart: &Chart, pins: &[(u32, [f64; 2])], shape: BoundaryShape) -> R
     fixed_boundary::solve(chart, pins, shape, Weights::MeanValue)
 }
 
-/// Refinement stops when the largest update is below this, relative to the largest |UV|.
-pub const REFINEMENT_TOLERANCE: f64 = 1e-12;
-/// Most refinement steps before [`solve_lean`] falls back to the LU solve.
-pub const MAX_REFINEMENTS: usize = 200;
+/// The iteration stops when the residual of the mean value system is below this, relative
+/// to its right-hand side (the coupling to the fixed boundary).
+pub const REFINEMENT_TOLERANCE: f64 = 1e-14;
+/// Most GMRES restarts before [`solve_lean`] falls back to the LU solve.
+pub const MAX_REFINEMENTS: usize = 40;
+/// Krylov vectors per GMRES cycle (memory: this many vectors of the chart's size).
+pub const GMRES_RESTART: usize = 20;
 
 /// [`solve`] with the boundary on a circle, by iterative refinement on the Cholesky
 /// factorization of the system's symmetric part (module docs) instead of sparse LU: the same
@@ -41,13 +44,19 @@ pub const MAX_REFINEMENTS: usize = 200;
 /// Pins as [`solve`] (the circle map moved onto them by a similarity, then solved again with
 /// the pins fixed). Failures: as [`solve`].
 pub fn solve_lean(chart: &Chart, pins: &[(u32, [f64; 2])]) -> Result<ChartSolution, ChartFailure> {
-    match solve_refined(chart, pins) {
+    match solve_by_refinement(chart, pins) {
         Ok(Some(sol)) => Ok(sol),
         Ok(None) | Err(_) => solve(chart, pins, BoundaryShape::Circle),
     }
 }
 
-/// The refinement solve of [`solve_lean`]; `None` when it did not converge.
+/// The refinement solve of [`solve_lean`] alone: `None` when the refinement did not converge
+/// in [`MAX_REFINEMENTS`] steps or diverged. Failures: a symmetric part that cannot be
+/// factored (disconnected chart).
+pub fn solve_by_refinement(chart: &Chart, pins: &[(u32, [f64; 2])]) -> Result<Option<ChartSolution>, ChartFailure> {
+    solve_refined(chart, pins).map_err(|e| ChartFailure(format!("mean value: {e}")))
+}
+
 fn solve_refined(chart: &Chart, pins: &[(u32, [f64; 2])]) -> Result<Option<ChartSolution>, SolveError> {
     let ext = fixed_boundary::fill_holes(chart);
     let n = ext.positions.len();
@@ -147,56 +156,145 @@ impl Refinement {
         out
     }
 
+    /// `A z` on the rows not fixed (0 on fixed rows).
+    fn apply(&self, z: &[f64], is_fixed: &[bool], out: &mut [f64]) {
+        for i in 0..self.n {
+            out[i] = if is_fixed[i] {
+                0.0
+            } else {
+                let (a, b) = (self.row_ptr[i], self.row_ptr[i + 1]);
+                let off: f64 = self.col[a..b].iter().zip(&self.val[a..b]).map(|(&j, &v)| v * z[j as usize]).sum();
+                self.diag[i] * z[i] + off
+            };
+        }
+    }
+
     /// Solve `A x = 0` on the unknowns not in `fixed`, with `fixed[k]` at `values[k]`; `None`
-    /// when the refinement does not converge.
+    /// when the iteration does not converge.
+    ///
+    /// Start: the symmetric part's solution. Then restarted GMRES (Saad & Schultz 1986) on the
+    /// free unknowns, right-preconditioned by the symmetric part's Cholesky factorization,
+    /// until the true residual is below [`REFINEMENT_TOLERANCE`] relative to the right-hand
+    /// side (or stagnates below its square root).
     fn solve(&self, fixed: &[u32], values: &[[f64; 2]]) -> Result<Option<Vec<[f64; 2]>>, SolveError> {
         let n = self.n;
         let s = FixedValueSolver::new(n, &self.symmetric_part(), fixed, Symmetry::Symmetric)?;
         let cols = vec![values.iter().map(|p| p[0]).collect::<Vec<_>>(), values.iter().map(|p| p[1]).collect::<Vec<_>>()];
-        let mut x = s.solve(&cols, &[])?;
+        let x = s.solve(&cols, &[])?;
         let mut is_fixed = vec![false; n];
         for &f in fixed {
             is_fixed[f as usize] = true;
         }
-        let zeros = vec![vec![0.0; fixed.len()]; 2];
-        let mut r = vec![vec![0.0; n]; 2];
-        let mut last = f64::INFINITY;
-        let mut growing = 0;
-        for _ in 0..MAX_REFINEMENTS {
-            for c in 0..2 {
-                let xc = &x[c];
-                for i in 0..n {
-                    r[c][i] = if is_fixed[i] {
-                        0.0
-                    } else {
-                        let (a, b) = (self.row_ptr[i], self.row_ptr[i + 1]);
-                        let off: f64 = self.col[a..b].iter().zip(&self.val[a..b]).map(|(&j, &v)| v * xc[j as usize]).sum();
-                        -(self.diag[i] * xc[i] + off)
-                    };
-                }
+        // Right-hand side scale: A_FC x_C, the coupling to the fixed values.
+        let mut out = Vec::with_capacity(2);
+        for mut xc in x {
+            let mut only_fixed = vec![0.0; n];
+            for &f in fixed {
+                only_fixed[f as usize] = xc[f as usize];
             }
-            let d = s.solve(&zeros, &r)?;
-            let (mut step, mut size) = (0.0f64, 0.0f64);
-            for c in 0..2 {
-                for i in 0..n {
-                    x[c][i] += d[c][i];
-                    step = step.max(d[c][i].abs());
-                    size = size.max(x[c][i].abs());
-                }
-            }
-            if !step.is_finite() {
+            let mut b = vec![0.0; n];
+            self.apply(&only_fixed, &is_fixed, &mut b);
+            drop(only_fixed);
+            let scale = b.iter().map(|v| v * v).sum::<f64>().sqrt();
+            if !self.gmres(&s, fixed.len(), &is_fixed, &mut xc, scale)? {
                 return Ok(None);
             }
-            if step <= REFINEMENT_TOLERANCE * size {
-                return Ok(Some((0..n).map(|i| [x[0][i], x[1][i]]).collect()));
-            }
-            // Diverging (S⁻¹A far from the identity): give up early.
-            growing = if step > last { growing + 1 } else { 0 };
-            if growing >= 3 {
-                return Ok(None);
-            }
-            last = step;
+            out.push(xc);
         }
-        Ok(None)
+        Ok(Some((0..n).map(|i| [out[0][i], out[1][i]]).collect()))
+    }
+
+    /// Restarted, right-preconditioned GMRES on `A_FF δ = −(A x)_F`, updating `x` in place.
+    fn gmres(&self, s: &FixedValueSolver, n_fixed: usize, is_fixed: &[bool], x: &mut [f64], scale: f64) -> Result<bool, SolveError> {
+        let n = self.n;
+        let zeros = vec![vec![0.0; n_fixed]];
+        let norm = |v: &[f64]| v.iter().map(|a| a * a).sum::<f64>().sqrt();
+        let precondition = |v: &[f64]| -> Result<Vec<f64>, SolveError> { Ok(s.solve(&zeros, &[v.to_vec()])?.pop().unwrap_or_default()) };
+        let mut r = vec![0.0; n];
+        let mut best = f64::INFINITY;
+        let mut stalled = 0;
+        for _ in 0..MAX_REFINEMENTS {
+            self.apply(x, is_fixed, &mut r);
+            for v in r.iter_mut() {
+                *v = -*v;
+            }
+            let beta = norm(&r);
+            if !beta.is_finite() {
+                return Ok(false);
+            }
+            if beta <= REFINEMENT_TOLERANCE * scale || beta == 0.0 {
+                return Ok(true);
+            }
+            // Stagnation at rounding level: accept below √tolerance, else give up.
+            if beta > 0.5 * best {
+                stalled += 1;
+                if stalled >= 2 {
+                    return Ok(beta <= REFINEMENT_TOLERANCE.sqrt() * scale);
+                }
+            } else {
+                stalled = 0;
+            }
+            best = best.min(beta);
+            // Arnoldi with modified Gram–Schmidt and Givens rotations.
+            let mut basis: Vec<Vec<f64>> = vec![r.iter().map(|v| v / beta).collect()];
+            let mut h: Vec<Vec<f64>> = Vec::new(); // column j: H[0..=j+1][j]
+            let (mut cs, mut sn): (Vec<f64>, Vec<f64>) = (Vec::new(), Vec::new());
+            let mut g = vec![beta];
+            let mut w = vec![0.0; n];
+            for j in 0..GMRES_RESTART {
+                let z = precondition(&basis[j])?;
+                self.apply(&z, is_fixed, &mut w);
+                let mut col = vec![0.0; j + 2];
+                for (i, q) in basis.iter().enumerate() {
+                    let d: f64 = q.iter().zip(&w).map(|(a, b)| a * b).sum();
+                    col[i] = d;
+                    for (wk, qk) in w.iter_mut().zip(q) {
+                        *wk -= d * qk;
+                    }
+                }
+                let wn = norm(&w);
+                col[j + 1] = wn;
+                for i in 0..j {
+                    let t = cs[i] * col[i] + sn[i] * col[i + 1];
+                    col[i + 1] = -sn[i] * col[i] + cs[i] * col[i + 1];
+                    col[i] = t;
+                }
+                let d = col[j].hypot(col[j + 1]);
+                let (c, sg) = if d > 0.0 { (col[j] / d, col[j + 1] / d) } else { (1.0, 0.0) };
+                cs.push(c);
+                sn.push(sg);
+                col[j] = d;
+                col[j + 1] = 0.0;
+                g.push(-sg * g[j]);
+                g[j] *= c;
+                h.push(col);
+                let done = g[j + 1].abs() <= 0.1 * REFINEMENT_TOLERANCE * scale || wn == 0.0;
+                if done || j + 1 == GMRES_RESTART {
+                    break;
+                }
+                basis.push(w.iter().map(|v| v / wn).collect());
+            }
+            // Back substitution for y, then x += M⁻¹ (V y).
+            let k = h.len();
+            let mut y = vec![0.0; k];
+            for i in (0..k).rev() {
+                let mut t = g[i];
+                for jj in i + 1..k {
+                    t -= h[jj][i] * y[jj];
+                }
+                y[i] = if h[i][i] != 0.0 { t / h[i][i] } else { 0.0 };
+            }
+            let mut v = vec![0.0; n];
+            for (q, yj) in basis.iter().zip(&y) {
+                for (vk, qk) in v.iter_mut().zip(q) {
+                    *vk += yj * qk;
+                }
+            }
+            let dx = precondition(&v)?;
+            for (xi, d) in x.iter_mut().zip(&dx) {
+                *xi += d;
+            }
+        }
+        Ok(false)
     }
 }

@@ -72,8 +72,10 @@ pub(super) struct Problem<'a> {
     pub(super) wheel_row: Vec<u32>,
     /// Reduced ABF++ matrix pattern, upper triangle by columns (the lower triangle by rows):
     /// column `j` holds rows `row_idx[col_ptr[j]..col_ptr[j + 1]]`, ascending, all ≤ j.
-    pub(super) col_ptr: Vec<usize>,
-    pub(super) row_idx: Vec<usize>,
+    /// 32-bit indices (half the memory of `usize`, in the symbolic factorization too): charts
+    /// beyond about 400 million triangles are refused ([`Reduced::new`]).
+    pub(super) col_ptr: Vec<u32>,
+    pub(super) row_idx: Vec<u32>,
     /// Per triangle, for each pair (i, j ≤ i) of its rows in order, the index of its entry in
     /// `row_idx`; triangle `f`'s pairs start at `slot_start[f]`.
     pub(super) slots: Vec<u32>,
@@ -124,7 +126,7 @@ impl<'a> Problem<'a> {
 
     /// Index in `row_idx` of the diagonal entry of row `r` (the last of its column).
     pub(super) fn diagonal_slot(&self, r: usize) -> usize {
-        self.col_ptr[r + 1] - 1
+        self.col_ptr[r + 1] as usize - 1
     }
 }
 
@@ -321,4 +323,100 @@ pub(super) fn evaluate_into(p: &Problem<'_>, s: &State, e: &mut Eval) {
         c_newton = c_row;
     }
     *e = Eval { faces, c_newton, diag, residual, stationarity, complementarity };
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 5 × 5 grid of vertices, two triangles per cell: 9 interior vertices.
+    fn grid() -> (Vec<[u32; 3]>, Vec<bool>) {
+        let n = 5u32;
+        let id = |i: u32, j: u32| i * n + j;
+        let mut tris = Vec::new();
+        for i in 0..n - 1 {
+            for j in 0..n - 1 {
+                tris.push([id(i, j), id(i, j + 1), id(i + 1, j + 1)]);
+                tris.push([id(i, j), id(i + 1, j + 1), id(i + 1, j)]);
+            }
+        }
+        let interior = (0..n * n).map(|v| (1..n - 1).contains(&(v / n)) && (1..n - 1).contains(&(v % n))).collect();
+        (tris, interior)
+    }
+
+    /// A deterministic pseudo-random number in [−1, 1).
+    fn noise(k: usize) -> f64 {
+        let x = (k as u64 + 1).wrapping_mul(0x9e3779b97f4a7c15) >> 11;
+        2.0 * (x as f64 / (1u64 << 53) as f64) - 1.0
+    }
+
+    fn state(tris: &[[u32; 3]], n: usize, seed: usize, beta: &[f64]) -> State {
+        State {
+            alpha: beta.iter().enumerate().map(|(c, b)| b + 0.05 * noise(seed + c)).collect(),
+            lam_tri: (0..tris.len()).map(|f| 0.3 * noise(seed + 1000 + f)).collect(),
+            lam_sum: (0..n).map(|v| 0.3 * noise(seed + 2000 + v)).collect(),
+            lam_wheel: (0..n).map(|v| 0.3 * noise(seed + 3000 + v)).collect(),
+            slack: vec![0.0; n],
+            mu: 0.0,
+            z_lo: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn face_rows_residuals_and_buffer_reuse() {
+        let (tris, interior) = grid();
+        let n = interior.len();
+        // Targets: the right isosceles grid angles, perturbed; a prescribed sum at one
+        // boundary vertex (π, a straight boundary there).
+        let beta: Vec<f64> = tris.iter().flat_map(|_| [PI / 4.0, PI / 2.0, PI / 4.0]).enumerate().map(|(c, b)| b * (1.0 + 0.1 * noise(c))).collect();
+        let sum_target: Vec<Option<f64>> = (0..n).map(|v| if interior[v] { Some(2.0 * PI) } else if v == 2 { Some(PI) } else { None }).collect();
+        let p = Problem::new(&tris, beta.clone(), &interior, &sum_target, &vec![false; n]);
+        // Every triangle's rows are those of its vertices, sum row before wheel row.
+        for (f, t) in tris.iter().enumerate() {
+            let fr = p.face_rows(f);
+            let mut expected = Vec::new();
+            for k in 0..3 {
+                let v = t[k] as usize;
+                for (r, row) in p.rows.iter().enumerate() {
+                    if row.vertex as usize == v {
+                        expected.push((r as u32, row.wheel, k as u8));
+                    }
+                }
+            }
+            assert_eq!(&fr.rows[..fr.len as usize], &expected[..], "triangle {f}");
+        }
+        // The row residuals follow the constraint definitions.
+        let s = state(&tris, n, 7, &beta);
+        let e = evaluate(&p, &s);
+        for (r, row) in p.rows.iter().enumerate() {
+            let v = row.vertex;
+            let mut c = if row.wheel { 0.0 } else { -p.target[r] };
+            for (f, t) in tris.iter().enumerate() {
+                for k in 0..3 {
+                    if t[k] == v {
+                        let a = |q: usize| s.alpha[3 * f + q];
+                        c += if row.wheel { a((k + 2) % 3).sin().ln() - a((k + 1) % 3).sin().ln() } else { a(k) };
+                    }
+                }
+            }
+            assert!((e.c_newton[r] - c).abs() < 1e-12, "row {r}: {} vs {c}", e.c_newton[r]);
+        }
+        for (f, fe) in e.faces.iter().enumerate() {
+            let sum: f64 = s.alpha[3 * f..3 * f + 3].iter().sum();
+            assert!((fe.c_tri - (sum - PI)).abs() < 1e-12);
+        }
+        // Evaluating into a buffer filled at another state gives the fresh evaluation, bit for bit.
+        let mut reused = evaluate(&p, &state(&tris, n, 99, &beta));
+        evaluate_into(&p, &s, &mut reused);
+        assert_eq!(reused.residual.to_bits(), e.residual.to_bits());
+        assert_eq!(reused.stationarity.to_bits(), e.stationarity.to_bits());
+        let bits = |x: &[f64]| x.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&reused.c_newton), bits(&e.c_newton));
+        for (a, b) in reused.faces.iter().zip(&e.faces) {
+            for (x, y) in [(&a.cot, &b.cot), (&a.grad, &b.grad), (&a.hess, &b.hess), (&a.log_sin, &b.log_sin)] {
+                assert_eq!(bits(x), bits(y));
+            }
+            assert_eq!(a.c_tri.to_bits(), b.c_tri.to_bits());
+        }
+    }
 }
