@@ -6,13 +6,15 @@
 //! methods on large charts: the sparse LU of the non-symmetric system is the largest
 //! allocation of such a start (about 1.7 KB per triangle). It factors the symmetric part
 //! instead (a graph Laplacian with the averaged weights `(w_ij + w_ji)/2`, positive definite
-//! with the boundary fixed, by Cholesky: about a sixth of the LU's memory) and solves the mean
-//! value system by iterative refinement preconditioned by it:
-//! `x ← x + S⁻¹ (b − A x)` from the symmetric map `x = S⁻¹ b`. The weights of a vertex's two
-//! directions differ only by the ratio of the tangent sums of the edge's two ends, so `S⁻¹A`
-//! is close to the identity and the iteration contracts fast (a few tens of iterations to the
-//! LU's precision on the meshes of the test set). When it does not contract, the LU solve is
-//! used after all.
+//! with the boundary fixed, by Cholesky: a fraction of the LU's memory), starts from its map
+//! and solves the mean value system by restarted GMRES (Y. Saad, M. H. Schultz, "GMRES: a
+//! generalized minimal residual algorithm for solving nonsymmetric linear systems", SIAM J.
+//! Sci. Stat. Comput. 7(3), 1986) right-preconditioned by that factorization, to a residual
+//! of [`REFINEMENT_TOLERANCE`] relative to the right-hand side. The weights of an edge's two
+//! directions differ only by the ratio of the tangent sums at its two ends, so the
+//! preconditioned matrix is close to the identity: a few cycles on the meshes of the test
+//! set, camelhead's sliver triangles included (a plain preconditioned Richardson iteration
+//! stalls there). When it does not converge, the LU solve is used after all.
 //!
 //! Preconditions: a disk chart (holes are filled virtually, see [`super::fixed_boundary`]).
 //! Failures: a singular system (disconnected chart) becomes a chart failure.
@@ -36,10 +38,11 @@ pub const MAX_REFINEMENTS: usize = 40;
 /// Krylov vectors per GMRES cycle (memory: this many vectors of the chart's size).
 pub const GMRES_RESTART: usize = 20;
 
-/// [`solve`] with the boundary on a circle, by iterative refinement on the Cholesky
+/// [`solve`] with the boundary on a circle, by GMRES preconditioned with the Cholesky
 /// factorization of the system's symmetric part (module docs) instead of sparse LU: the same
-/// map to about [`REFINEMENT_TOLERANCE`] relative, with a fraction of the memory. Falls back
-/// to [`solve`] when the refinement does not converge in [`MAX_REFINEMENTS`] steps.
+/// map up to rounding (residual [`REFINEMENT_TOLERANCE`] relative), with a fraction of the
+/// memory. Falls back to [`solve`] when the iteration does not converge in
+/// [`MAX_REFINEMENTS`] restarts.
 ///
 /// Pins as [`solve`] (the circle map moved onto them by a similarity, then solved again with
 /// the pins fixed). Failures: as [`solve`].
@@ -50,8 +53,8 @@ pub fn solve_lean(chart: &Chart, pins: &[(u32, [f64; 2])]) -> Result<ChartSoluti
     }
 }
 
-/// The refinement solve of [`solve_lean`] alone: `None` when the refinement did not converge
-/// in [`MAX_REFINEMENTS`] steps or diverged. Failures: a symmetric part that cannot be
+/// The iterative solve of [`solve_lean`] alone: `None` when it did not converge in
+/// [`MAX_REFINEMENTS`] GMRES restarts. Failures: a symmetric part that cannot be
 /// factored (disconnected chart).
 pub fn solve_by_refinement(chart: &Chart, pins: &[(u32, [f64; 2])]) -> Result<Option<ChartSolution>, ChartFailure> {
     solve_refined(chart, pins).map_err(|e| ChartFailure(format!("mean value: {e}")))
