@@ -1,11 +1,14 @@
 //! Peak memory and time of one unwrap of a large disk chart:
-//! `cargo run --release --example memory -- METHOD TRIANGLES [SLIM_ITERATIONS]`.
+//! `cargo run --release --example memory -- METHOD TRIANGLES|MESH.off [SLIM_ITERATIONS]`.
 //!
-//! METHOD is `lscm`, `abf` or `slim`. The mesh is the hexagonal disk of
+//! METHOD is `lscm`, `abf` or `slim`. The mesh is a mesh file (OFF/OBJ), or the hexagonal disk of
 //! `blender_scripts/scaling.py` (`6 R²` triangles, lifted onto `z = 0.3 r²`). Prints wall and
 //! CPU seconds of the unwrap, the chart's status and note, and the peak resident memory
 //! (VmHWM) in MB and KB per triangle. Built with the system allocator, so a heap profiler
 //! (e.g. `heaptrack`) can attribute the peak to its allocations.
+
+#[path = "../tests/common/mod.rs"]
+mod common;
 
 use std::f64::consts::PI;
 use std::time::Instant;
@@ -52,10 +55,19 @@ fn disk(triangles: usize) -> (Vec<[f64; 3]>, Vec<u32>) {
 
 fn main() {
     let method = std::env::args().nth(1).unwrap_or_else(|| "abf".into());
-    let n: usize = std::env::args().nth(2).map(|a| a.parse().expect("triangles")).unwrap_or(200_000);
+    let mesh = std::env::args().nth(2).unwrap_or_else(|| "200000".into());
     let slim_iterations: usize = std::env::args().nth(3).map(|a| a.parse().expect("iterations")).unwrap_or(20);
-    let (positions, corner_verts) = disk(n);
-    let face_sizes = vec![3u32; corner_verts.len() / 3];
+    let (positions, corner_verts, face_sizes) = match mesh.parse::<usize>() {
+        Ok(n) => {
+            let (p, c) = disk(n);
+            let f = vec![3u32; c.len() / 3];
+            (p, c, f)
+        }
+        Err(_) => {
+            let s = common::load(std::path::Path::new(&mesh));
+            (s.positions, s.corner_verts, s.face_sizes)
+        }
+    };
     let method = match method.as_str() {
         "lscm" => Method::Lscm,
         "abf" => Method::Abf(Default::default()),
@@ -68,6 +80,7 @@ fn main() {
     let r = unwrap(&input, &UnwrapOptions { method, ..Default::default() }).expect("unwrap");
     let (dt, dcpu) = (t.elapsed().as_secs_f64(), cpu_seconds() - cpu0);
     let c = &r.charts[0];
+    println!("{} charts, iterations {:?}", r.charts.len(), r.charts.iter().map(|c| c.iterations).collect::<Vec<_>>());
     println!(
         "{} triangles: {dt:.3} s (cpu {dcpu:.3} s), {:?}, {} iterations, residual {:.3e}, flips {}, reason {:?}",
         face_sizes.len(),
