@@ -309,6 +309,7 @@ pub fn solve_with_history(
                     b[2 * t[i] as usize + 1] -= g[i][1];
                 }
             }
+            drop(grads);
             let t1 = Instant::now();
             let s = solver.as_mut().expect("Newton steps follow a SLIM step");
             let factored = s.refactor(&values);
@@ -366,15 +367,21 @@ pub fn solve_with_history(
                 b[2 * t[i] as usize + 1] += c[i][1];
             }
         }
+        drop(rhs_parts);
         let t1 = Instant::now();
         let factored = match solver.as_mut() {
             None => {
                 for (p, v) in pattern.iter_mut().zip(&values) {
                     p.2 = *v;
                 }
+                // The first factorization sets the peak memory: the triplets carry the
+                // values, so the value array is given back until the solver has its own copy.
+                let len = values.len();
+                drop(std::mem::take(&mut values));
                 let made = FixedValueSolver::new(2 * n, &pattern, &fixed_ids, Symmetry::Symmetric).map(|s| solver = Some(s));
                 // The solver keeps the pattern; this copy is not needed again.
                 pattern = Vec::new();
+                values = vec![0.0; len];
                 made
             }
             Some(s) => s.refactor(&values),

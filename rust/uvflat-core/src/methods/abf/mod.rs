@@ -337,8 +337,7 @@ fn solve_filled(chart: &Chart, options: &AbfOptions, prescribed: &[(u32, f64)]) 
             fixed_sum[v as usize] = None;
         }
     }
-    let beta3 = target_angles_with_sums(chart, prescribed);
-    let beta: Vec<f64> = beta3.iter().flatten().copied().collect();
+    let beta: Vec<f64> = target_angles_with_sums(chart, prescribed).into_iter().flatten().collect();
     let interior: Vec<bool> = chart.boundary_mask().iter().map(|b| !b).collect();
     let outer: Vec<u32> = match (options.boundary, chart.outer_loop()) {
         (AbfBoundary::Convex, Some(l)) => chart.boundary_loops[l].clone(),
@@ -363,21 +362,25 @@ fn solve_filled(chart: &Chart, options: &AbfOptions, prescribed: &[(u32, f64)]) 
             lam_sum[v] = CONVEX_DUAL_START;
         }
     }
-    let mut p = Problem::new(tris, beta.clone(), &interior, &sum_target, &ineq);
+    drop(beta_sums);
+    let mut p = Problem::new(tris, beta, &interior, &sum_target, &ineq);
+    drop((interior, sum_target));
     let mut z_lo = Vec::new();
     if p.has_ineq {
-        let beta_min = beta.iter().copied().fold(f64::INFINITY, f64::min);
+        let beta_min = p.beta.iter().copied().fold(f64::INFINITY, f64::min);
         p.lower = convex_lower_bound(outer.len()).min(0.5 * beta_min);
         if p.lower > 0.0 {
-            z_lo = beta.iter().map(|&b| CONVEX_MU_START / (b - p.lower).max(CONVEX_SLACK_START)).collect();
+            z_lo = p.beta.iter().map(|&b| CONVEX_MU_START / (b - p.lower).max(CONVEX_SLACK_START)).collect();
         }
     }
-    let mut s = State { alpha: beta.clone(), lam_tri: vec![0.0; nf], lam_sum, lam_wheel: vec![0.0; n], slack, mu: CONVEX_MU_START, z_lo };
+    let mut s = State { alpha: p.beta.clone(), lam_tri: vec![0.0; nf], lam_sum, lam_wheel: vec![0.0; n], slack, mu: CONVEX_MU_START, z_lo };
     let run = newton(&p, &mut s, options).map_err(|e| ChartFailure(format!("abf: {e}")))?;
     let (iterations, factorizations, converged, residual, stationarity) =
         (run.iterations, run.factorizations, run.converged, run.residual, run.stationarity);
     let sums = vertex_sums(chart, &s.alpha);
     let active = |v: usize| ineq[v] && sums[v] > cap - CONVEX_ACTIVE;
+    let beta3: Vec<[f64; 3]> = p.beta.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+    drop(p);
     let alpha: Vec<[f64; 3]> = s.alpha.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
     let convex_active = (0..n as u32).filter(|&v| active(v as usize)).collect();
     Ok(AbfAngles { alpha, beta: beta3, iterations, factorizations, residual, stationarity, converged, convex_active })

@@ -96,7 +96,7 @@ pub(super) fn step_plus_plus(w: &mut PlusPlus, p: &Problem<'_>, e: &Eval, mode: 
         let rr = fe.c_tri - (lb[0] + lb[1] + lb[2]);
         w.dinv[f] = dinv;
         w.r1[f] = rr;
-        let fr = &p.face_rows[f];
+        let fr = p.face_rows(f);
         let len = fr.len as usize;
         let mut g = [[0.0; 3]; MAX_FACE_ROWS];
         let mut u = [[0.0; 3]; MAX_FACE_ROWS];
@@ -137,7 +137,7 @@ pub(super) fn step_plus_plus(w: &mut PlusPlus, p: &Problem<'_>, e: &Eval, mode: 
     for_faces(&mut steps, |f, st| {
         let fe = &e.faces[f];
         let (cot, hess) = jac_of(f);
-        let fr = &p.face_rows[f];
+        let fr = p.face_rows(f);
         let mut jt = [0.0; 3]; // J₂ᵀ dλ on this triangle
         for &(r, wheel, k) in &fr.rows[..fr.len as usize] {
             let g = row_grad(wheel, k as usize, &cot);
@@ -170,7 +170,7 @@ pub(super) fn step_plain(slot: &mut Option<FixedValueSolver>, p: &Problem<'_>, e
             trip.push(((3 * nf + f) as u32, c, 1.0));
             trip.push((c, (3 * nf + f) as u32, 1.0));
         }
-        let fr = &p.face_rows[f];
+        let fr = p.face_rows(f);
         for &(r, wheel, k) in &fr.rows[..fr.len as usize] {
             let g = row_grad(wheel, k as usize, &fe.cot);
             let row = (4 * nf) as u32 + r;
@@ -238,9 +238,14 @@ pub(super) fn newton(p: &Problem<'_>, s: &mut State, opts: &AbfOptions) -> Resul
             let step = lin.step(p, &e, Mode::Chord)?;
             let mut trial = s.clone();
             apply_step(p, &mut trial, &step, &e, opts.tolerance);
-            let et = evaluate(p, &trial);
+            drop(step);
+            // One evaluation alive at a time: the trial's replaces the current one, which is
+            // evaluated again if the chord step is rejected.
+            let (residual, stationarity) = (e.residual, e.stationarity);
+            evaluate_into(p, &trial, &mut e);
+            let et = &e;
             let cut = |new: f64, old: f64, tol: f64| new <= CHORD_CONTRACTION * old || new < tol;
-            if cut(et.residual, e.residual, opts.tolerance) && cut(et.stationarity, e.stationarity, stat_tol) {
+            if cut(et.residual, residual, opts.tolerance) && cut(et.stationarity, stationarity, stat_tol) {
                 // Chord steps converge linearly: when this rate needs more than
                 // CHORD_MAX_PREDICTED more of them, refactor next instead.
                 let needed = |new: f64, old: f64, tol: f64| {
@@ -250,19 +255,21 @@ pub(super) fn newton(p: &Problem<'_>, s: &mut State, opts: &AbfOptions) -> Resul
                         (tol / new).ln() / (new / old).ln()
                     }
                 };
-                let more = needed(et.residual, e.residual, opts.tolerance).max(needed(et.stationarity, e.stationarity, stat_tol));
+                let more = needed(et.residual, residual, opts.tolerance).max(needed(et.stationarity, stationarity, stat_tol));
                 refactor_next = more > CHORD_MAX_PREDICTED;
                 *s = trial;
-                e = et;
                 it += 1;
                 continue;
             }
+            drop(trial);
+            evaluate_into(p, s, &mut e);
         }
         let step = lin.step(p, &e, Mode::Factor)?;
         factorizations += 1;
         refactor_next = false;
         apply_step(p, s, &step, &e, opts.tolerance);
-        e = evaluate(p, s);
+        drop(step);
+        evaluate_into(p, s, &mut e);
         it += 1;
     }
 }

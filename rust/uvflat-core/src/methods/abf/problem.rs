@@ -66,16 +66,21 @@ pub(super) fn for_faces<T: Send>(items: &mut [T], f: impl Fn(usize, &mut T) + Sy
 
 pub(super) struct Problem<'a> {
     pub(super) tris: &'a [[u32; 3]],
+    /// Target angle per corner; the energy weight is `1/β²`, computed where used.
     pub(super) beta: Vec<f64>,
-    pub(super) w: Vec<f64>,
     pub(super) rows: Vec<Row>,
     /// Sum target per row (2π interior, π active boundary; unused for wheel rows).
     pub(super) target: Vec<f64>,
-    pub(super) face_rows: Vec<FaceRows>,
+    /// Sum row and wheel row of every vertex (`u32::MAX` for none): each triangle's
+    /// [`FaceRows`] follow ([`Problem::face_rows`]), so they are not stored per triangle.
+    pub(super) sum_row: Vec<u32>,
+    pub(super) wheel_row: Vec<u32>,
     /// Reduced ABF++ matrix pattern, upper triangle by columns (the lower triangle by rows):
     /// column `j` holds rows `row_idx[col_ptr[j]..col_ptr[j + 1]]`, ascending, all ≤ j.
-    pub(super) col_ptr: Vec<usize>,
-    pub(super) row_idx: Vec<usize>,
+    /// 32-bit indices (half the memory of `usize`, in the symbolic factorization too): charts
+    /// beyond about 400 million triangles are refused ([`Reduced::new`]).
+    pub(super) col_ptr: Vec<u32>,
+    pub(super) row_idx: Vec<u32>,
     /// Per triangle, for each pair (i, j ≤ i) of its rows in order, the index of its entry in
     /// `row_idx`; triangle `f`'s pairs start at `slot_start[f]`.
     pub(super) slots: Vec<u32>,
@@ -108,27 +113,16 @@ impl<'a> Problem<'a> {
                 target.push(0.0);
             }
         }
-        let face_rows: Vec<FaceRows> = tris
-            .iter()
-            .map(|t| {
-                let mut fr = FaceRows::default();
-                for k in 0..3 {
-                    let v = t[k] as usize;
-                    for (r, wheel) in [(sum_row[v], false), (wheel_row[v], true)] {
-                        if r != u32::MAX {
-                            fr.rows[fr.len as usize] = (r, wheel, k as u8);
-                            fr.len += 1;
-                        }
-                    }
-                }
-                fr
-            })
-            .collect();
-        let w = beta.iter().map(|b| 1.0 / (b * b)).collect();
         let m = rows.len();
-        let (col_ptr, row_idx, slots, slot_start) = reduced_pattern(m, &face_rows);
+        let (col_ptr, row_idx, slots, slot_start) = reduced_pattern(m, tris.len(), |f| face_rows_of(&tris[f], &sum_row, &wheel_row));
         let has_ineq = rows.iter().any(|r| r.ineq);
-        Problem { tris, beta, w, rows, target, face_rows, col_ptr, row_idx, slots, slot_start, has_ineq, lower: 0.0 }
+        Problem { tris, beta, rows, target, sum_row, wheel_row, col_ptr, row_idx, slots, slot_start, has_ineq, lower: 0.0 }
+    }
+
+    /// The constraint rows touching triangle `f`.
+    #[inline]
+    pub(super) fn face_rows(&self, f: usize) -> FaceRows {
+        face_rows_of(&self.tris[f], &self.sum_row, &self.wheel_row)
     }
 
     pub(super) fn m(&self) -> usize {
@@ -137,8 +131,24 @@ impl<'a> Problem<'a> {
 
     /// Index in `row_idx` of the diagonal entry of row `r` (the last of its column).
     pub(super) fn diagonal_slot(&self, r: usize) -> usize {
-        self.col_ptr[r + 1] - 1
+        self.col_ptr[r + 1] as usize - 1
     }
+}
+
+/// The rows of a triangle's vertices, in corner order (sum row before wheel row).
+#[inline]
+fn face_rows_of(t: &[u32; 3], sum_row: &[u32], wheel_row: &[u32]) -> FaceRows {
+    let mut fr = FaceRows::default();
+    for k in 0..3 {
+        let v = t[k] as usize;
+        for (r, wheel) in [(sum_row[v], false), (wheel_row[v], true)] {
+            if r != u32::MAX {
+                fr.rows[fr.len as usize] = (r, wheel, k as u8);
+                fr.len += 1;
+            }
+        }
+    }
+    fr
 }
 
 /// Newton state: angles and multipliers (vertex multipliers per vertex so that they survive a
@@ -168,8 +178,8 @@ pub(super) struct FaceEval {
     pub(super) hess: [f64; 3],
     /// Triangle residual: angle sum − π.
     pub(super) c_tri: f64,
-    /// This triangle's terms of its rows' residuals, in [`FaceRows`] order.
-    pub(super) row_terms: [f64; MAX_FACE_ROWS],
+    /// log sin α per corner (the wheel rows' residual terms).
+    pub(super) log_sin: [f64; 3],
     /// Largest scaled Lagrangian gradient of the triangle's corners.
     pub(super) stationarity: f64,
 }
@@ -197,8 +207,17 @@ pub(super) struct Eval {
 /// with `Σ 1/h < 0` (with a margin) — which keeps the reduced ABF++ matrix positive definite
 /// and gives Newton's quadratic convergence; other triangles use the energy's `2/β²`.
 pub(super) fn evaluate(p: &Problem<'_>, s: &State) -> Eval {
+    let mut e = Eval { faces: Vec::new(), c_newton: Vec::new(), diag: Vec::new(), residual: 0.0, stationarity: 0.0, complementarity: 0.0 };
+    evaluate_into(p, s, &mut e);
+    e
+}
+
+/// [`evaluate`] into `e`, reusing its per-triangle buffer (one evaluation alive at a time).
+pub(super) fn evaluate_into(p: &Problem<'_>, s: &State, e: &mut Eval) {
     let nf = p.tris.len();
-    let mut faces = vec![FaceEval::default(); nf];
+    let mut faces = std::mem::take(&mut e.faces);
+    faces.clear();
+    faces.resize(nf, FaceEval::default());
     for_faces(&mut faces, |f, fe| {
         let a = [s.alpha[3 * f], s.alpha[3 * f + 1], s.alpha[3 * f + 2]];
         let mut sn = [0.0; 3];
@@ -215,24 +234,23 @@ pub(super) fn evaluate(p: &Problem<'_>, s: &State) -> Eval {
         let mut energy_hess = [0.0; 3];
         for k in 0..3 {
             let c = 3 * f + k;
-            grad[k] = 2.0 * p.w[c] * (a[k] - p.beta[c]) + s.lam_tri[f];
-            energy_hess[k] = 2.0 * p.w[c];
+            let w = 1.0 / (p.beta[c] * p.beta[c]);
+            grad[k] = 2.0 * w * (a[k] - p.beta[c]) + s.lam_tri[f];
+            energy_hess[k] = 2.0 * w;
             hess[k] = energy_hess[k];
         }
-        let fr = &p.face_rows[f];
-        for (j, &(_, wheel, k)) in fr.rows[..fr.len as usize].iter().enumerate() {
+        let fr = p.face_rows(f);
+        for &(_, wheel, k) in &fr.rows[..fr.len as usize] {
             let k = k as usize;
             let v = p.tris[f][k] as usize;
             let (k1, k2) = ((k + 1) % 3, (k + 2) % 3);
             if wheel {
-                fe.row_terms[j] = ls[k2] - ls[k1];
                 let l = s.lam_wheel[v];
                 grad[k1] -= l * ct[k1];
                 grad[k2] += l * ct[k2];
                 hess[k1] += l / (sn[k1] * sn[k1]);
                 hess[k2] -= l / (sn[k2] * sn[k2]);
             } else {
-                fe.row_terms[j] = a[k];
                 grad[k] += s.lam_sum[v];
             }
         }
@@ -267,15 +285,20 @@ pub(super) fn evaluate(p: &Problem<'_>, s: &State) -> Eval {
             hess = fallback_hess;
         }
         fe.cot = ct;
+        fe.log_sin = ls;
         fe.grad = grad;
         fe.hess = hess;
         fe.c_tri = a[0] + a[1] + a[2] - PI;
         fe.stationarity = stat;
     });
     let mut c_row: Vec<f64> = p.rows.iter().zip(&p.target).map(|(row, t)| if row.wheel { 0.0 } else { -t }).collect();
-    for (fe, fr) in faces.iter().zip(&p.face_rows) {
-        for (term, row) in fe.row_terms.iter().zip(&fr.rows[..fr.len as usize]) {
-            c_row[row.0 as usize] += term;
+    for (f, fe) in faces.iter().enumerate() {
+        let fr = p.face_rows(f);
+        for &(r, wheel, k) in &fr.rows[..fr.len as usize] {
+            let k = k as usize;
+            // The row's term of this triangle: log sin α_{k+2} − log sin α_{k+1}, or α_k.
+            let term = if wheel { fe.log_sin[(k + 2) % 3] - fe.log_sin[(k + 1) % 3] } else { s.alpha[3 * f + k] };
+            c_row[r as usize] += term;
         }
     }
     let mut complementarity: f64 = 0.0;
@@ -304,5 +327,101 @@ pub(super) fn evaluate(p: &Problem<'_>, s: &State) -> Eval {
     if !p.has_ineq {
         c_newton = c_row;
     }
-    Eval { faces, c_newton, diag, residual, stationarity, complementarity }
+    *e = Eval { faces, c_newton, diag, residual, stationarity, complementarity };
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 5 × 5 grid of vertices, two triangles per cell: 9 interior vertices.
+    fn grid() -> (Vec<[u32; 3]>, Vec<bool>) {
+        let n = 5u32;
+        let id = |i: u32, j: u32| i * n + j;
+        let mut tris = Vec::new();
+        for i in 0..n - 1 {
+            for j in 0..n - 1 {
+                tris.push([id(i, j), id(i, j + 1), id(i + 1, j + 1)]);
+                tris.push([id(i, j), id(i + 1, j + 1), id(i + 1, j)]);
+            }
+        }
+        let interior = (0..n * n).map(|v| (1..n - 1).contains(&(v / n)) && (1..n - 1).contains(&(v % n))).collect();
+        (tris, interior)
+    }
+
+    /// A deterministic pseudo-random number in [−1, 1).
+    fn noise(k: usize) -> f64 {
+        let x = (k as u64 + 1).wrapping_mul(0x9e3779b97f4a7c15) >> 11;
+        2.0 * (x as f64 / (1u64 << 53) as f64) - 1.0
+    }
+
+    fn state(tris: &[[u32; 3]], n: usize, seed: usize, beta: &[f64]) -> State {
+        State {
+            alpha: beta.iter().enumerate().map(|(c, b)| b + 0.05 * noise(seed + c)).collect(),
+            lam_tri: (0..tris.len()).map(|f| 0.3 * noise(seed + 1000 + f)).collect(),
+            lam_sum: (0..n).map(|v| 0.3 * noise(seed + 2000 + v)).collect(),
+            lam_wheel: (0..n).map(|v| 0.3 * noise(seed + 3000 + v)).collect(),
+            slack: vec![0.0; n],
+            mu: 0.0,
+            z_lo: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn face_rows_residuals_and_buffer_reuse() {
+        let (tris, interior) = grid();
+        let n = interior.len();
+        // Targets: the right isosceles grid angles, perturbed; a prescribed sum at one
+        // boundary vertex (π, a straight boundary there).
+        let beta: Vec<f64> = tris.iter().flat_map(|_| [PI / 4.0, PI / 2.0, PI / 4.0]).enumerate().map(|(c, b)| b * (1.0 + 0.1 * noise(c))).collect();
+        let sum_target: Vec<Option<f64>> = (0..n).map(|v| if interior[v] { Some(2.0 * PI) } else if v == 2 { Some(PI) } else { None }).collect();
+        let p = Problem::new(&tris, beta.clone(), &interior, &sum_target, &vec![false; n]);
+        // Every triangle's rows are those of its vertices, sum row before wheel row.
+        for (f, t) in tris.iter().enumerate() {
+            let fr = p.face_rows(f);
+            let mut expected = Vec::new();
+            for k in 0..3 {
+                let v = t[k] as usize;
+                for (r, row) in p.rows.iter().enumerate() {
+                    if row.vertex as usize == v {
+                        expected.push((r as u32, row.wheel, k as u8));
+                    }
+                }
+            }
+            assert_eq!(&fr.rows[..fr.len as usize], &expected[..], "triangle {f}");
+        }
+        // The row residuals follow the constraint definitions.
+        let s = state(&tris, n, 7, &beta);
+        let e = evaluate(&p, &s);
+        for (r, row) in p.rows.iter().enumerate() {
+            let v = row.vertex;
+            let mut c = if row.wheel { 0.0 } else { -p.target[r] };
+            for (f, t) in tris.iter().enumerate() {
+                for k in 0..3 {
+                    if t[k] == v {
+                        let a = |q: usize| s.alpha[3 * f + q];
+                        c += if row.wheel { a((k + 2) % 3).sin().ln() - a((k + 1) % 3).sin().ln() } else { a(k) };
+                    }
+                }
+            }
+            assert!((e.c_newton[r] - c).abs() < 1e-12, "row {r}: {} vs {c}", e.c_newton[r]);
+        }
+        for (f, fe) in e.faces.iter().enumerate() {
+            let sum: f64 = s.alpha[3 * f..3 * f + 3].iter().sum();
+            assert!((fe.c_tri - (sum - PI)).abs() < 1e-12);
+        }
+        // Evaluating into a buffer filled at another state gives the fresh evaluation, bit for bit.
+        let mut reused = evaluate(&p, &state(&tris, n, 99, &beta));
+        evaluate_into(&p, &s, &mut reused);
+        assert_eq!(reused.residual.to_bits(), e.residual.to_bits());
+        assert_eq!(reused.stationarity.to_bits(), e.stationarity.to_bits());
+        let bits = |x: &[f64]| x.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&reused.c_newton), bits(&e.c_newton));
+        for (a, b) in reused.faces.iter().zip(&e.faces) {
+            for (x, y) in [(&a.cot, &b.cot), (&a.grad, &b.grad), (&a.hess, &b.hess), (&a.log_sin, &b.log_sin)] {
+                assert_eq!(bits(x), bits(y));
+            }
+            assert_eq!(a.c_tri.to_bits(), b.c_tri.to_bits());
+        }
+    }
 }

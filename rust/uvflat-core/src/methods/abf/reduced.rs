@@ -12,9 +12,9 @@ use super::*;
 /// once per constraint set, and for every triangle the entries its pairs of rows sum into, so
 /// that every Newton step sums straight into a fixed value array (count, fill, sort and
 /// deduplicate each column, then look every pair up).
-pub(super) fn reduced_pattern(m: usize, face_rows: &[FaceRows]) -> (Vec<usize>, Vec<usize>, Vec<u32>, Vec<u32>) {
+pub(super) fn reduced_pattern(m: usize, nf: usize, face_rows: impl Fn(usize) -> FaceRows) -> (Vec<u32>, Vec<u32>, Vec<u32>, Vec<u32>) {
     let mut count = vec![0usize; m + 1];
-    for fr in face_rows {
+    for fr in (0..nf).map(&face_rows) {
         for i in 0..fr.len as usize {
             for j in 0..=i {
                 let (a, b) = (fr.rows[i].0, fr.rows[j].0);
@@ -27,7 +27,7 @@ pub(super) fn reduced_pattern(m: usize, face_rows: &[FaceRows]) -> (Vec<usize>, 
     }
     let mut fill = count.clone();
     let mut cols = vec![0u32; count[m]];
-    for fr in face_rows {
+    for fr in (0..nf).map(&face_rows) {
         for i in 0..fr.len as usize {
             for j in 0..=i {
                 let (a, b) = (fr.rows[i].0, fr.rows[j].0);
@@ -38,8 +38,8 @@ pub(super) fn reduced_pattern(m: usize, face_rows: &[FaceRows]) -> (Vec<usize>, 
         }
     }
     // Sort and deduplicate each column in place.
-    let mut col_ptr = vec![0usize; m + 1];
-    let mut row_idx = Vec::with_capacity(count[m] / 2);
+    let mut col_ptr = vec![0u32; m + 1];
+    let mut row_idx: Vec<u32> = Vec::with_capacity(count[m] / 2);
     for r in 0..m {
         let seg = &mut cols[count[r]..count[r + 1]];
         seg.sort_unstable();
@@ -50,20 +50,20 @@ pub(super) fn reduced_pattern(m: usize, face_rows: &[FaceRows]) -> (Vec<usize>, 
                 k += 1;
             }
         }
-        row_idx.extend(seg[..k].iter().map(|&c| c as usize));
-        col_ptr[r + 1] = row_idx.len();
+        row_idx.extend_from_slice(&seg[..k]);
+        col_ptr[r + 1] = row_idx.len() as u32;
     }
     let mut slots = Vec::with_capacity(count[m]);
-    let mut slot_start = Vec::with_capacity(face_rows.len() + 1);
-    for fr in face_rows {
+    let mut slot_start = Vec::with_capacity(nf + 1);
+    for fr in (0..nf).map(&face_rows) {
         slot_start.push(slots.len() as u32);
         for i in 0..fr.len as usize {
             for j in 0..=i {
                 let (a, b) = (fr.rows[i].0, fr.rows[j].0);
                 let (r, c) = (a.max(b) as usize, a.min(b) as usize);
-                let seg = &row_idx[col_ptr[r]..col_ptr[r + 1]];
-                let pos = seg.binary_search(&c).expect("entry in pattern");
-                slots.push((col_ptr[r] + pos) as u32);
+                let seg = &row_idx[col_ptr[r] as usize..col_ptr[r + 1] as usize];
+                let pos = seg.binary_search(&(c as u32)).expect("entry in pattern");
+                slots.push(col_ptr[r] + pos as u32);
             }
         }
     }
@@ -75,11 +75,15 @@ pub(super) fn reduced_pattern(m: usize, face_rows: &[FaceRows]) -> (Vec<usize>, 
 pub(super) const PROJECTED_HESSIAN_MARGIN: f64 = 0.1;
 
 
+/// Most rows of the reduced system (about one triangle each): its indices, and those of its
+/// factor (about 130 entries per row on large charts, growing slowly), are 32-bit.
+pub(super) const MAX_ROWS: usize = 8_000_000;
+
 /// Sparse Cholesky of the reduced ABF++ matrix on its fixed pattern: the symbolic analysis
 /// (with a fill-reducing ordering of the vertices, expanded to their constraint rows) once,
 /// then numeric factorizations straight from the pattern's value array, reusing all buffers.
 pub(super) struct Reduced {
-    pub(super) symbolic: faer::sparse::linalg::cholesky::SymbolicCholesky<usize>,
+    pub(super) symbolic: faer::sparse::linalg::cholesky::SymbolicCholesky<u32>,
     pub(super) l_values: Vec<f64>,
     pub(super) mem: faer::dyn_stack::MemBuffer,
 }
@@ -89,8 +93,12 @@ impl Reduced {
         use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, CholeskySymbolicParams, SymmetricOrdering};
         let m = p.m();
         let other = |e: &dyn std::fmt::Debug| SolveError::Other(format!("{e:?}"));
+        if m > MAX_ROWS {
+            return Err(SolveError::Other(format!("{m} vertex constraint rows exceed the {MAX_ROWS} of the 32-bit reduced system")));
+        }
         let a = faer::sparse::SymbolicSparseColMatRef::new_checked(m, m, &p.col_ptr, None, &p.row_idx);
         let (fwd, inv) = vertex_ordering(p).map_err(|e| other(&e))?;
+        let (fwd, inv): (Vec<u32>, Vec<u32>) = (fwd.iter().map(|&x| x as u32).collect(), inv.iter().map(|&x| x as u32).collect());
         let perm = faer::perm::PermRef::new_checked(&fwd, &inv, m);
         let symbolic = factorize_symbolic_cholesky(a, faer::Side::Upper, SymmetricOrdering::Custom(perm), CholeskySymbolicParams::default())
             .map_err(|e| other(&e))?;
@@ -153,8 +161,8 @@ pub(super) fn vertex_ordering(p: &Problem<'_>) -> Result<(Vec<usize>, Vec<usize>
     let mut mark = vec![usize::MAX; g];
     for gc in 0..g {
         for c in start[gc]..start[gc + 1] {
-            for &r in &p.row_idx[p.col_ptr[c]..p.col_ptr[c + 1]] {
-                let gr = group[r];
+            for &r in &p.row_idx[p.col_ptr[c] as usize..p.col_ptr[c + 1] as usize] {
+                let gr = group[r as usize];
                 if mark[gr] != gc {
                     mark[gr] = gc;
                     row_idx.push(gr);

@@ -13,18 +13,31 @@
 
 use crate::charts::Chart;
 use crate::methods::fixed_boundary::{self, Weights};
-use crate::methods::{chart_angles, lscm, nonconvex_quads, BoundaryShape, ChartFailure};
+use crate::methods::{chart_angles, lscm, mean_value, nonconvex_quads, BoundaryShape, ChartFailure, ChartSolution};
 
 /// A starting map: its UVs and the name of the method that made it.
 pub type Candidate = (Vec<[f64; 2]>, &'static str);
 
 /// The mean value map with the boundary on a circle: the flip-free start of last resort.
 pub fn flip_free_start(chart: &Chart) -> Result<Vec<[f64; 2]>, ChartFailure> {
-    Ok(fixed_boundary::solve(chart, &[], BoundaryShape::Circle, Weights::MeanValue)?.uv)
+    Ok(mean_value_start(chart, &[])?.uv)
 }
 
-/// Charts of at least this many triangles compute their candidate starts one after the other.
+/// Charts of at least this many triangles compute their candidate starts one after the other,
+/// and the mean value start without a general LU ([`mean_value_start`]).
 pub const SEQUENTIAL_STARTS_FROM: usize = 100_000;
+
+/// The mean value map on a circle honouring `start_pins`: on charts of at least
+/// [`SEQUENTIAL_STARTS_FROM`] triangles by [`mean_value::solve_lean`] (the same map without
+/// the general sparse LU, whose factors would set the method's peak memory), else by the LU
+/// solve of [`fixed_boundary::solve`].
+pub fn mean_value_start(chart: &Chart, start_pins: &[(u32, [f64; 2])]) -> Result<ChartSolution, ChartFailure> {
+    if chart.triangles.len() >= SEQUENTIAL_STARTS_FROM {
+        mean_value::solve_lean(chart, start_pins)
+    } else {
+        fixed_boundary::solve(chart, start_pins, BoundaryShape::Circle, Weights::MeanValue)
+    }
+}
 
 /// The candidate starting maps, computed side by side (independent solves): LSCM (if
 /// `with_lscm`) and the mean value map on a circle, both honouring `start_pins`. Returns the
@@ -36,7 +49,7 @@ pub fn candidate_starts(chart: &Chart, start_pins: &[(u32, [f64; 2])], with_lscm
             lscm::solve_with_angles(chart, &angles, start_pins)
         })
     };
-    let mean_value_start = || fixed_boundary::solve(chart, start_pins, BoundaryShape::Circle, Weights::MeanValue);
+    let mean_value_start = || mean_value_start(chart, start_pins);
     // Side by side on two threads, except on large charts, where the two factorizations
     // alive at once would set the peak memory (about 1.3 KB per triangle more).
     let (lscm_start, mean_value_start) = if chart.triangles.len() < SEQUENTIAL_STARTS_FROM {

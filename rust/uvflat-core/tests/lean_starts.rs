@@ -1,0 +1,124 @@
+//! The mean value start without a general LU ([`mean_value::solve_lean`]): iterative
+//! refinement on the Cholesky factorization of the system's symmetric part.
+//!
+//! Properties checked: the refinement converges on every test chart (holes, quads, pins) and
+//! gives the LU's map to 1e-9; the map is flip-free; large charts' barrier starts use it and
+//! still match the LU map, and SLIM from it never flips and never increases its energy.
+
+mod common;
+
+use common::*;
+use uvflat_core::charts::{build_charts, Chart};
+use uvflat_core::mesh::PolyMesh;
+use uvflat_core::methods::mean_value;
+use uvflat_core::methods::nonlinear::start;
+use uvflat_core::methods::slim::{self, SlimOptions};
+use uvflat_core::methods::BoundaryShape;
+
+const MESHES: &[&str] = &["camelhead.off", "lion.off", "alligator.obj", "beetle.off", "halftunnel.off", "3holes.off"];
+
+fn charts_of(s: &Soup, seams: &[[u32; 2]]) -> Vec<Chart> {
+    let mesh = PolyMesh::new(&s.positions, &s.corner_verts, &s.face_sizes).unwrap();
+    build_charts(&mesh, seams, None)
+}
+
+/// A disk lifted onto a smooth non-developable height field (curved: unequal mean value
+/// weights in the two directions of an edge).
+fn bumpy_disk(rings: usize, per_ring: usize) -> Soup {
+    let mut s = planar_disk(rings, per_ring);
+    let scale = rings as f64 / 10.0;
+    for p in s.positions.iter_mut() {
+        let (x, y) = (p[0] / scale, p[1] / scale);
+        p[2] = scale * (3.0 * (-(x * x + y * y) / 20.0).exp() + 0.4 * (0.7 * x).sin());
+    }
+    s
+}
+
+/// Smallest doubled signed area of the chart's triangles under `uv`.
+fn least_area(chart: &Chart, uv: &[[f64; 2]]) -> f64 {
+    chart
+        .triangles
+        .iter()
+        .map(|t| {
+            let (a, b, c) = (uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]);
+            (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+fn max_difference(a: &[[f64; 2]], b: &[[f64; 2]]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    a.iter().zip(b).map(|(p, q)| (p[0] - q[0]).abs().max((p[1] - q[1]).abs())).fold(0.0, f64::max)
+}
+
+/// Every disk chart (with or without holes) of the synthetic cases and the shared meshes.
+fn disk_charts() -> Vec<(String, Chart)> {
+    let (cyl, seams) = cut_cylinder(48, 12, 2.0);
+    let mut soups = vec![("bumpy_disk".to_string(), bumpy_disk(10, 7), vec![]), ("cut_cylinder (quads)".to_string(), cyl, seams)];
+    match shared_meshes() {
+        Some(dir) => {
+            for f in MESHES {
+                soups.push((f.to_string(), load(&dir.join(f)), vec![]));
+            }
+        }
+        None => eprintln!("shared meshes absent: checking the synthetic charts only"),
+    }
+    let mut out = Vec::new();
+    for (name, s, seams) in soups {
+        for (i, c) in charts_of(&s, &seams).into_iter().enumerate() {
+            if c.defect.is_none() && !c.boundary_loops.is_empty() && c.triangles.len() >= 8 {
+                out.push((format!("{name} chart {i}"), c));
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn refinement_converges_to_the_lu_mean_value_map_without_flips() {
+    let charts = disk_charts();
+    assert!(!charts.is_empty());
+    for (name, chart) in &charts {
+        let lu = mean_value::solve(chart, &[], BoundaryShape::Circle).unwrap().uv;
+        let refined = mean_value::solve_by_refinement(chart, &[]).unwrap().unwrap_or_else(|| panic!("{name}: refinement did not converge"));
+        let d = max_difference(&lu, &refined.uv);
+        assert!(d < 1e-9, "{name}: refined map differs from the LU map by {d:e}");
+        assert!(least_area(chart, &refined.uv) > 0.0, "{name}: the refined mean value map flips a triangle");
+    }
+}
+
+#[test]
+fn refinement_honours_pins_like_the_lu_solve() {
+    for (name, chart) in disk_charts().iter().take(4) {
+        let lu0 = mean_value::solve(chart, &[], BoundaryShape::Circle).unwrap().uv;
+        // Two pins a little away from the free map: the map is moved onto them and solved
+        // again with them fixed.
+        let (a, b) = (0u32, (chart.positions.len() / 2) as u32);
+        let pins = [(a, [lu0[a as usize][0] + 0.01, lu0[a as usize][1]]), (b, [lu0[b as usize][0], lu0[b as usize][1] - 0.02])];
+        let lu = mean_value::solve(chart, &pins, BoundaryShape::Circle).unwrap();
+        let refined = mean_value::solve_by_refinement(chart, &pins).unwrap().unwrap_or_else(|| panic!("{name}: no convergence with pins"));
+        let d = max_difference(&lu.uv, &refined.uv);
+        assert!(d < 1e-9, "{name}: pinned refined map differs from the LU map by {d:e}");
+        for (v, p) in pins {
+            assert_eq!(refined.uv[v as usize], p, "{name}: pin {v} moved");
+        }
+    }
+}
+
+#[test]
+fn large_charts_start_from_the_lean_map_and_slim_keeps_it_flip_free() {
+    // About 100k triangles: above the size from which the barrier methods' mean value start
+    // is solved without LU.
+    let s = bumpy_disk(120, 7);
+    let chart = charts_of(&s, &[]).remove(0);
+    assert!(chart.triangles.len() >= start::SEQUENTIAL_STARTS_FROM, "{} triangles", chart.triangles.len());
+    let lean = start::mean_value_start(&chart, &[]).unwrap().uv;
+    let lu = mean_value::solve(&chart, &[], BoundaryShape::Circle).unwrap().uv;
+    let d = max_difference(&lu, &lean);
+    assert!(d < 1e-9, "large chart: start differs from the LU map by {d:e}");
+    assert!(least_area(&chart, &lean) > 0.0);
+    let (sol, history) = slim::solve_with_history(&chart, &[], &SlimOptions { max_iterations: 3, ..Default::default() }).unwrap();
+    assert!(sol.fallback.is_none());
+    assert!(least_area(&chart, &sol.uv) > 0.0, "SLIM flipped a triangle");
+    assert!(history.energy.windows(2).all(|w| w[1] <= w[0]), "energy increased: {:?}", history.energy);
+}
