@@ -1,8 +1,8 @@
 //! Fill-reducing orderings for sparse Cholesky: faer's approximate minimum degree (AMD) for
 //! small systems, nested dissection above [`ND_MIN_SIZE`] unknowns.
 //!
-//! Which one pays depends on how often the system is factored. Nested dissection takes 3–5×
-//! longer to compute than AMD and stores up to ~10 % fewer factor entries on large irregular
+//! Which one pays depends on how often the system is factored. Nested dissection takes
+//! 1.4–3.4× longer to compute than AMD and stores up to ~10 % fewer factor entries on large irregular
 //! charts (none fewer on regular ones), so it pays only when that saving is collected on many
 //! numeric factorizations: [`OrderingKind::Auto`] is for those systems (SLIM, MIPS, scaffold,
 //! ABF++'s reduced system). A system factored once (LSCM, Tutte, harmonic, mean value) or
