@@ -42,10 +42,10 @@ fn main() {
         let (mut dt, mut dcpu, mut a) = (f64::INFINITY, f64::INFINITY, None);
         for _ in 0..reps {
             let t = Instant::now();
-            let cpu0 = cpu_seconds();
+            let cpu0 = common::cpu_seconds();
             a = Some(abf::solve_angles(c, &opts));
             dt = dt.min(t.elapsed().as_secs_f64());
-            dcpu = dcpu.min(cpu_seconds() - cpu0);
+            dcpu = dcpu.min(common::cpu_seconds() - cpu0);
         }
         let a = a.expect("one repetition");
         match a {
@@ -58,10 +58,10 @@ fn main() {
     }
     for _ in 0..if levels > 0 { 1 } else { 3 } {
         let t = Instant::now();
-        let cpu0 = cpu_seconds();
+        let cpu0 = common::cpu_seconds();
         let r = unwrap(&s.input(), &UnwrapOptions { method: Method::Abf(opts.clone()), ..Default::default() }).unwrap();
         let dt = t.elapsed().as_secs_f64();
-        let dcpu = cpu_seconds() - cpu0;
+        let dcpu = common::cpu_seconds() - cpu0;
         let flips: usize = r.charts.iter().map(|c| c.flips).sum();
         let c = &r.charts[0];
         println!(
@@ -75,17 +75,4 @@ fn main() {
     }
 }
 
-/// CPU time of all threads of this process so far (scheduler statistics, nanoseconds): a
-/// timing that other processes on a busy machine do not inflate.
-fn cpu_seconds() -> f64 {
-    let mut ns = 0u64;
-    if let Ok(dir) = std::fs::read_dir("/proc/self/task") {
-        for t in dir.flatten() {
-            if let Ok(s) = std::fs::read_to_string(t.path().join("schedstat")) {
-                ns += s.split_whitespace().next().and_then(|x| x.parse::<u64>().ok()).unwrap_or(0);
-            }
-        }
-    }
-    ns as f64 * 1e-9
-}
 

@@ -61,11 +61,11 @@ fn main() {
         // Only `abf::solve` on every chart, `repeats` times (for perf).
         let mut cpu = Vec::new();
         for _ in 0..repeats {
-            let c0 = cpu_seconds();
+            let c0 = common::cpu_seconds();
             for c in charts.iter().filter(|c| c.defect.is_none() && !c.boundary_loops.is_empty()) {
                 std::hint::black_box(abf::solve(c, &[], &opts).expect("solve"));
             }
-            cpu.push(cpu_seconds() - c0);
+            cpu.push(common::cpu_seconds() - c0);
         }
         cpu.sort_by(f64::total_cmp);
         println!("abf::solve on every chart: cpu median {:.4} s per pass (min {:.4})", cpu[cpu.len() / 2], cpu[0]);
@@ -153,10 +153,10 @@ fn main() {
     let mut result = None;
     for _ in 0..repeats {
         let t = Instant::now();
-        let c0 = cpu_seconds();
+        let c0 = common::cpu_seconds();
         result = Some(unwrap(&input, &options).unwrap());
         wall.push(t.elapsed().as_secs_f64());
-        cpu.push(cpu_seconds() - c0);
+        cpu.push(common::cpu_seconds() - c0);
     }
     wall.sort_by(f64::total_cmp);
     cpu.sort_by(f64::total_cmp);
@@ -226,15 +226,3 @@ fn angle(o: [f64; 3], a: [f64; 3], b: [f64; 3]) -> f64 {
     (cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]).sqrt().atan2(dot)
 }
 
-/// CPU time of all threads of this process so far (scheduler statistics).
-fn cpu_seconds() -> f64 {
-    let mut ns = 0u64;
-    if let Ok(dir) = std::fs::read_dir("/proc/self/task") {
-        for t in dir.flatten() {
-            if let Ok(s) = std::fs::read_to_string(t.path().join("schedstat")) {
-                ns += s.split_whitespace().next().and_then(|x| x.parse::<u64>().ok()).unwrap_or(0);
-            }
-        }
-    }
-    ns as f64 * 1e-9
-}

@@ -76,9 +76,9 @@ fn main() {
     };
     let input = MeshInput { positions: &positions, corner_verts: &corner_verts, face_sizes: &face_sizes, ..Default::default() };
     let t = Instant::now();
-    let cpu0 = cpu_seconds();
+    let cpu0 = common::cpu_seconds();
     let r = unwrap(&input, &UnwrapOptions { method, ..Default::default() }).expect("unwrap");
-    let (dt, dcpu) = (t.elapsed().as_secs_f64(), cpu_seconds() - cpu0);
+    let (dt, dcpu) = (t.elapsed().as_secs_f64(), common::cpu_seconds() - cpu0);
     let c = &r.charts[0];
     println!("{} charts, iterations {:?}", r.charts.len(), r.charts.iter().map(|c| c.iterations).collect::<Vec<_>>());
     println!(
@@ -99,15 +99,3 @@ fn main() {
     }
 }
 
-/// CPU time of all threads of this process so far (scheduler statistics).
-fn cpu_seconds() -> f64 {
-    let mut ns = 0u64;
-    if let Ok(dir) = std::fs::read_dir("/proc/self/task") {
-        for t in dir.flatten() {
-            if let Ok(s) = std::fs::read_to_string(t.path().join("schedstat")) {
-                ns += s.split_whitespace().next().and_then(|x| x.parse::<u64>().ok()).unwrap_or(0);
-            }
-        }
-    }
-    ns as f64 * 1e-9
-}

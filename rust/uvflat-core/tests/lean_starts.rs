@@ -36,14 +36,7 @@ fn bumpy_disk(rings: usize, per_ring: usize) -> Soup {
 
 /// Smallest doubled signed area of the chart's triangles under `uv`.
 fn least_area(chart: &Chart, uv: &[[f64; 2]]) -> f64 {
-    chart
-        .triangles
-        .iter()
-        .map(|t| {
-            let (a, b, c) = (uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]);
-            (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
-        })
-        .fold(f64::INFINITY, f64::min)
+    common::doubled_signed_areas(&chart.triangles, uv).into_iter().fold(f64::INFINITY, f64::min)
 }
 
 fn max_difference(a: &[[f64; 2]], b: &[[f64; 2]]) -> f64 {

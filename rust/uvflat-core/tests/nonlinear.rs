@@ -33,18 +33,6 @@ fn charts_of(s: &Soup, seams: &[[u32; 2]]) -> Vec<Chart> {
     build_charts(&mesh, seams, None)
 }
 
-/// Signed doubled area of every chart triangle under `uv`.
-fn signed_areas(chart: &Chart, uv: &[[f64; 2]]) -> Vec<f64> {
-    chart
-        .triangles
-        .iter()
-        .map(|t| {
-            let (a, b, c) = (uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]);
-            (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
-        })
-        .collect()
-}
-
 fn synthetic() -> Vec<(&'static str, Soup, Vec<[u32; 2]>)> {
     let (cyl, seams) = cut_cylinder(48, 12, 2.0);
     vec![("planar_disk", planar_disk(8, 7), vec![]), ("cut_cylinder", cyl, seams), ("bumpy_disk", bumpy_disk(), vec![])]
@@ -80,7 +68,7 @@ fn slim_never_flips_on_shared_meshes_and_synthetic_disks() {
             if matches!(chart.kind, ChartKind::Disk | ChartKind::DiskWithHoles) && chart.defect.is_none() {
                 let sol = slim::solve(&chart, &[], &SlimOptions::default()).unwrap();
                 assert!(sol.fallback.is_none());
-                let neg = signed_areas(&chart, &sol.uv).iter().filter(|a| a.is_nan() || **a <= 0.0).count();
+                let neg = common::doubled_signed_areas(&chart.triangles, &sol.uv).iter().filter(|a| a.is_nan() || **a <= 0.0).count();
                 assert_eq!(neg, 0, "{name}: {neg} non-positive triangles");
             }
         }

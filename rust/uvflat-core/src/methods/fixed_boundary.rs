@@ -438,32 +438,7 @@ pub fn solve(
     let mut sol = ChartSolution::direct(Vec::new());
     if !pins.is_empty() {
         // Move the whole solution (hence the boundary) onto the pins, then fix both.
-        let mut target = vec![[f64::NAN; 2]; uv.len()];
-        for &(v, p) in pins {
-            target[v as usize] = p;
-        }
-        let moved = if super::lscm::pins_span(pins) {
-            crate::metrics::fit_similarity_points(&mut uv, &target)
-        } else {
-            false
-        };
-        if !moved {
-            let (v, p) = pins[0];
-            let d = [p[0] - uv[v as usize][0], p[1] - uv[v as usize][1]];
-            for q in uv.iter_mut() {
-                *q = [q[0] + d[0], q[1] + d[1]];
-            }
-        }
-        let mut fixed: Vec<u32> = ext.outer.clone();
-        let mut vals: Vec<[f64; 2]> = ext.outer.iter().map(|&v| uv[v as usize]).collect();
-        for &(v, p) in pins {
-            if let Some(k) = fixed.iter().position(|&f| f == v) {
-                vals[k] = p;
-            } else {
-                fixed.push(v);
-                vals.push(p);
-            }
-        }
+        let (fixed, vals) = onto_pins(&mut uv, &ext.outer, pins);
         let solver = FixedValueSolver::with_ordering(n, &trip, &fixed, symmetry, OrderingKind::Amd)?;
         let cols = [vals.iter().map(|p| p[0]).collect::<Vec<_>>(), vals.iter().map(|p| p[1]).collect::<Vec<_>>()];
         let x = solver.solve(&cols, &[])?;
@@ -481,4 +456,33 @@ pub fn solve(
     uv.truncate(chart.positions.len());
     sol.uv = uv;
     Ok(sol)
+}
+
+/// Move the map `uv` onto `pins` (the similarity that fits them when they span more than a
+/// point, else the translation onto the first) and return the unknowns to hold for the pinned
+/// solve with their values: the `outer` loop where the moved map puts it, and the pins.
+pub(crate) fn onto_pins(uv: &mut [[f64; 2]], outer: &[u32], pins: &[(u32, [f64; 2])]) -> (Vec<u32>, Vec<[f64; 2]>) {
+    let mut target = vec![[f64::NAN; 2]; uv.len()];
+    for &(v, p) in pins {
+        target[v as usize] = p;
+    }
+    let moved = super::lscm::pins_span(pins) && crate::metrics::fit_similarity_points(uv, &target);
+    if !moved {
+        let (v, p) = pins[0];
+        let d = [p[0] - uv[v as usize][0], p[1] - uv[v as usize][1]];
+        for q in uv.iter_mut() {
+            *q = [q[0] + d[0], q[1] + d[1]];
+        }
+    }
+    let mut fixed: Vec<u32> = outer.to_vec();
+    let mut vals: Vec<[f64; 2]> = outer.iter().map(|&v| uv[v as usize]).collect();
+    for &(v, p) in pins {
+        if let Some(k) = fixed.iter().position(|&f| f == v) {
+            vals[k] = p;
+        } else {
+            fixed.push(v);
+            vals.push(p);
+        }
+    }
+    (fixed, vals)
 }

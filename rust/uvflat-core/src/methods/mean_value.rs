@@ -71,28 +71,7 @@ fn solve_refined(chart: &Chart, pins: &[(u32, [f64; 2])]) -> Result<Option<Chart
     let mut sol = ChartSolution::direct(Vec::new());
     if !pins.is_empty() {
         // As `fixed_boundary::solve`: move the map onto the pins, then fix boundary and pins.
-        let mut target = vec![[f64::NAN; 2]; uv.len()];
-        for &(v, p) in pins {
-            target[v as usize] = p;
-        }
-        let moved = super::lscm::pins_span(pins) && crate::metrics::fit_similarity_points(&mut uv, &target);
-        if !moved {
-            let (v, p) = pins[0];
-            let d = [p[0] - uv[v as usize][0], p[1] - uv[v as usize][1]];
-            for q in uv.iter_mut() {
-                *q = [q[0] + d[0], q[1] + d[1]];
-            }
-        }
-        let mut fixed: Vec<u32> = ext.outer.clone();
-        let mut vals: Vec<[f64; 2]> = ext.outer.iter().map(|&v| uv[v as usize]).collect();
-        for &(v, p) in pins {
-            if let Some(k) = fixed.iter().position(|&f| f == v) {
-                vals[k] = p;
-            } else {
-                fixed.push(v);
-                vals.push(p);
-            }
-        }
+        let (fixed, vals) = super::fixed_boundary::onto_pins(&mut uv, &ext.outer, pins);
         let Some(pinned) = system.solve(&fixed, &vals)? else {
             return Ok(None);
         };

@@ -200,3 +200,28 @@ pub fn every_method(iterations: usize, spectral_iterations: usize) -> Vec<uvflat
     ]);
     v
 }
+
+/// Doubled signed area of every triangle under `uv` (positive: counter-clockwise).
+pub fn doubled_signed_areas(triangles: &[[u32; 3]], uv: &[[f64; 2]]) -> Vec<f64> {
+    triangles
+        .iter()
+        .map(|t| {
+            let (a, b, c) = (uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]);
+            (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+        })
+        .collect()
+}
+
+/// CPU time of all threads of this process so far (scheduler statistics, nanoseconds): a
+/// timing that other processes on a busy machine do not inflate.
+pub fn cpu_seconds() -> f64 {
+    let mut ns = 0u64;
+    if let Ok(dir) = std::fs::read_dir("/proc/self/task") {
+        for t in dir.flatten() {
+            if let Ok(s) = std::fs::read_to_string(t.path().join("schedstat")) {
+                ns += s.split_whitespace().next().and_then(|x| x.parse::<u64>().ok()).unwrap_or(0);
+            }
+        }
+    }
+    ns as f64 * 1e-9
+}
