@@ -23,6 +23,7 @@ use super::fixed_boundary::{self, Weights};
 use super::{ChartFailure, ChartSolution};
 use crate::charts::Chart;
 use crate::methods::BoundaryShape;
+use crate::solvers::ordering::OrderingKind;
 use crate::solvers::{FixedValueSolver, SolveError, Symmetry};
 
 /// Map one chart; the outer boundary goes to `shape`.
@@ -160,7 +161,8 @@ impl Refinement {
     /// side (or stagnates below its square root).
     fn solve(&self, fixed: &[u32], values: &[[f64; 2]]) -> Result<Option<Vec<[f64; 2]>>, SolveError> {
         let n = self.n;
-        let s = FixedValueSolver::new(n, &self.symmetric_part(), fixed, Symmetry::Symmetric)?;
+        // Factored once, solved on every GMRES step: AMD (see `solvers::ordering`).
+        let s = FixedValueSolver::with_ordering(n, &self.symmetric_part(), fixed, Symmetry::Symmetric, OrderingKind::Amd)?;
         let cols = vec![values.iter().map(|p| p[0]).collect::<Vec<_>>(), values.iter().map(|p| p[1]).collect::<Vec<_>>()];
         let x = s.solve(&cols, &[])?;
         let mut is_fixed = vec![false; n];

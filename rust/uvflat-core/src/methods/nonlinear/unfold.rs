@@ -174,6 +174,21 @@ mod tests {
         }
         let fan: Vec<[u32; 3]> = (0..k as u32).map(|i| [0, 1 + i, 1 + (i + 1) % k as u32]).collect();
         assert!(unfold(&chart_of(&positions, &fan)).is_none());
+        // A ring (one hole): every vertex is on a boundary, but the dual graph has a cycle.
+        let m = 8u32;
+        let mut ring = Vec::new();
+        for i in 0..m {
+            let a = i as f64 / m as f64 * std::f64::consts::TAU;
+            ring.push([a.cos(), a.sin(), 0.0]);
+            ring.push([2.0 * a.cos(), 2.0 * a.sin(), 0.3]);
+        }
+        let band: Vec<[u32; 3]> = (0..m)
+            .flat_map(|i| {
+                let (a, b, c, d) = (2 * i, 2 * i + 1, 2 * ((i + 1) % m), 2 * ((i + 1) % m) + 1);
+                [[a, b, d], [a, d, c]]
+            })
+            .collect();
+        assert!(unfold(&chart_of(&ring, &band)).is_none());
         // Two triangles, one of them with collinear corners.
         let flat = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0], [1.0, 1.0, 0.0]];
         assert!(unfold(&chart_of(&flat, &[[0, 1, 3], [1, 2, 3]])).is_some());
