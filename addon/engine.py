@@ -457,7 +457,7 @@ def _pack_by_proxy(context, pack_sets, settings, phases) -> bool:
     if not proxy_pack.applicable(settings, n_islands, locked, aspects, n_faces):
         return False
     uvs = {id(job): mesh_io.read_uv(job.obj.data, job.uv_name) for job, _ in chosen}
-    islands = proxy_pack.islands(chosen, uvs)
+    islands = proxy_pack.islands(import_core(), chosen, uvs)
     if islands is None:
         return False
     transforms = proxy_pack.pack(context, islands, settings, _enter_edit_mode, _leave_edit_mode)

@@ -17,8 +17,8 @@ island (the island's convex hull, same UVs), chooses the same similarities; they
 back from two hull vertices and applied to every corner of the real island. The real meshes
 are never put in edit mode for it and their selection and pins are never touched.
 
-The hull of an island is the hull of its boundary corners: the corners on edges used by one
-packed face only, on seams (marked, or cut by automatic seams) and on non-manifold edges.
+The hull of an island is the hull of all its corners' UVs, computed by the core
+(``uvflat.island_hulls``) for every island of a mesh in one call.
 
 :func:`islands` returns ``None`` where this does not hold (islands packed around locked ones,
 a non-square texture aspect, several islands with the exact shape, degenerate islands, very
@@ -60,81 +60,40 @@ def applicable(settings, n_islands: int, locked: bool, aspects, n_faces: int) ->
     return settings.shape_method in ("AABB", "CONVEX") or n_islands == 1
 
 
-def _boundary_corners(mesh, face_sizes, corner_in, seam_pairs):
-    """``(C,)`` mask of the packed corners on an island boundary (see the module doc)."""
-    corner_edges = mesh_io.read_corner_edges(mesh)
-    _, use_seam = mesh_io.read_edges(mesh)
-    uses = np.bincount(corner_edges[corner_in], minlength=len(use_seam))
-    boundary = (uses != 2) | use_seam
-    if len(seam_pairs):
-        boundary |= mesh_io.seam_mask_of_pairs(mesh, seam_pairs)
-    on_edge = corner_in & boundary[corner_edges]
-    # the edge of corner c ends at the next corner of its face: both are on the boundary
-    starts = np.zeros(len(face_sizes), dtype=np.int64)
-    np.cumsum(face_sizes[:-1], out=starts[1:])
-    following = np.arange(len(corner_edges)) + 1
-    following[starts + face_sizes - 1] = starts
-    out = on_edge.copy()
-    out[following[on_edge]] = True
-    return out
-
-
-def _hull(points):
-    """Counter-clockwise convex hull of ``points`` ((N,2)), or ``None`` if it has no area."""
-    from mathutils.geometry import convex_hull_2d
-
-    if len(points) < 3:
-        return None
-    hull = points[np.asarray(convex_hull_2d(points.tolist()), dtype=np.int64)]
-    if len(hull) < 3:
-        return None
-    x, y = hull[:, 0], hull[:, 1]
-    area = 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
-    if not area > 0.0:
-        if area < 0.0:
-            return hull[::-1].copy()
-        return None
-    return hull
-
-
-def _grouped(corners, corner_chart, ids):
-    """``corners`` ordered by island (``ids``: the sorted chart ids) and where each island's
-    run starts; a counting sort (island numbers fit 16 bits, :data:`MAX_ISLANDS`)."""
-    if len(ids) == 1:
+def _grouped(corners, corner_island, n_islands):
+    """``corners`` ordered by island (``corner_island``: their island numbers, below
+    ``n_islands`` <= :data:`MAX_ISLANDS`) and where each island's run starts."""
+    if n_islands == 1:
         return corners, np.zeros(1, dtype=np.int64)
-    island = np.searchsorted(ids, corner_chart[corners]).astype(np.int16)
-    order = np.argsort(island, kind="stable")
-    return corners[order], np.searchsorted(island[order], np.arange(len(ids)))
+    order = np.argsort(corner_island.astype(np.int16), kind="stable")
+    return corners[order], np.searchsorted(corner_island[order], np.arange(n_islands))
 
 
-def islands(jobs_faces, uvs):
+def islands(core, jobs_faces, uvs):
     """The islands of ``jobs_faces`` (pairs ``(job, packed faces mask)``) with their hulls,
     from the UVs in ``uvs`` (job id -> (C,2) float32 as written); ``None`` if any island is
-    degenerate or there are more than :data:`MAX_ISLANDS`."""
+    degenerate or there are more than :data:`MAX_ISLANDS`. ``core``: the uvflat module, whose
+    ``island_hulls`` computes every island's hull (of all its corners' UVs, as Blender's
+    packer does) in one call per mesh."""
     out = []
     for job, faces in jobs_faces:
         if not faces.any():
             continue
         face_sizes = job.face_sizes.astype(np.int64)
         chart = np.asarray(job.result.chart, dtype=np.int64)
-        ids = np.unique(chart[faces])
+        ids, face_island = np.unique(chart[faces], return_inverse=True)
         if len(out) + len(ids) > MAX_ISLANDS:
             return None
+        island = np.zeros(len(chart), dtype=np.int64)
+        island[faces] = face_island
+        offsets, points = core.island_hulls(uvs[id(job)], face_sizes, island, selected=faces)
+        if np.any(np.diff(offsets) < 3):
+            return None
         corner_in = np.repeat(faces, face_sizes)
-        corner_chart = np.repeat(chart, face_sizes)
-        seams = np.asarray(getattr(job.result, "new_seams", ()), dtype=np.int64).reshape(-1, 2)
-        edge = _boundary_corners(job.obj.data, face_sizes, corner_in, seams)
-        uv = uvs[id(job)].astype(np.float64)
-        members, cut = _grouped(np.flatnonzero(corner_in), corner_chart, ids)
-        on_edge, edge_cut = _grouped(np.flatnonzero(edge), corner_chart, ids)
+        members, cut = _grouped(np.flatnonzero(corner_in), np.repeat(island, face_sizes)[corner_in], len(ids))
+        ends = np.append(cut[1:], len(members))
         for k in range(len(ids)):
-            end = cut[k + 1] if k + 1 < len(ids) else len(members)
-            edge_end = edge_cut[k + 1] if k + 1 < len(ids) else len(on_edge)
-            points = np.unique(uv[on_edge[edge_cut[k]:edge_end]], axis=0)
-            hull = _hull(points)
-            if hull is None:
-                return None
-            out.append(Island(job, members[cut[k]:end], hull))
+            out.append(Island(job, members[cut[k]:ends[k]], points[offsets[k]:offsets[k + 1]]))
     return out
 
 

@@ -1278,3 +1278,50 @@ def test_result_carries_the_per_face_distortion_of_its_uvs(method):
     assert np.ptp(np.asarray(r.face_area)[solved]) > 1e-3  # the measure is not constant
     d = r.as_dict()
     np.testing.assert_array_equal(d["face_conformal"], r.face_conformal)
+
+
+# Island hulls (the packer's view of each island)
+
+
+def _check_hull(points, hull):
+    """``hull``: strictly convex, counter-clockwise, made of input points, holding them all."""
+    n = len(hull)
+    assert n >= 3
+    for i in range(n):
+        a, b, c = hull[i], hull[(i + 1) % n], hull[(i + 2) % n]
+        assert (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]) > 0.0
+        edge = (b[0] - a[0]) * (points[:, 1] - a[1]) - (b[1] - a[1]) * (points[:, 0] - a[0])
+        assert np.all(edge >= -1e-12)
+    assert all(np.any(np.all(points == v, axis=1)) for v in hull)
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_island_hulls_hold_every_corner_of_their_island(seed):
+    rng = np.random.default_rng(seed)
+    face_sizes = rng.integers(3, 7, size=300)
+    n_islands = 7
+    face_island = rng.integers(0, n_islands, size=len(face_sizes))
+    selected = rng.random(len(face_sizes)) > 0.2
+    uv = rng.normal(size=(int(face_sizes.sum()), 2)).astype(np.float32)  # as Blender stores them
+    offsets, points = uvflat.island_hulls(uv, face_sizes, face_island, selected=selected)
+    assert offsets.shape == (n_islands + 1,) and points.shape == (offsets[-1], 2)
+    corner_island = np.repeat(np.where(selected, face_island, -1), face_sizes)
+    for k in range(n_islands):
+        mine = uv[corner_island == k].astype(np.float64)
+        _check_hull(mine, points[offsets[k]:offsets[k + 1]])
+
+
+def test_island_hulls_report_islands_without_area_and_bad_input():
+    face_sizes = np.array([3, 3, 4])
+    uv = np.array([[0, 0], [1, 0], [0, 1],          # island 0: a triangle
+                   [0, 0], [1, 1], [2, 2],          # island 1: collinear
+                   [0, 0], [1, 0], [np.nan, 1], [0, 1]])  # island 2: a non-finite UV
+    offsets, points = uvflat.island_hulls(uv, face_sizes, np.array([0, 1, 2]))
+    assert list(np.diff(offsets)) == [3, 0, 0]
+    with pytest.raises(uvflat.InputError, match="face 2"):
+        uvflat.island_hulls(uv, face_sizes, np.array([0, 1, 3]))
+    with pytest.raises(uvflat.InputError) as err:
+        uvflat.island_hulls(uv[:9], face_sizes, np.array([0, 1, 2]))
+    assert err.value.argument == "uv"
+    with pytest.raises(uvflat.InputError):
+        uvflat.island_hulls(uv, face_sizes, np.array([0, -1, 2]))

@@ -6,7 +6,8 @@
 //! global parallelism for the per-chart angle timings (it affects the plain ABF LU solver
 //! only: the ABF++ reduced system is factored sequentially, which measured faster).
 //! Prints wall and CPU time (all threads) and the peak resident memory (VmHWM) at the end.
-//! `ABF_REPS=N` repeats each per-chart angle solve N times and reports the fastest.
+//! `ABF_REPS=N` repeats each per-chart angle solve N times and reports the fastest;
+//! `ABF_TOL=T` sets the Newton tolerance (default 1e-9) to see what a looser one saves.
 #[path = "../tests/common/mod.rs"]
 mod common;
 
@@ -26,7 +27,10 @@ fn main() {
         Some("convex") => AbfBoundary::Convex,
         _ => AbfBoundary::Free,
     };
-    let opts = AbfOptions { solver, boundary, ..Default::default() };
+    let mut opts = AbfOptions { solver, boundary, ..Default::default() };
+    if let Some(t) = std::env::var("ABF_TOL").ok().and_then(|x| x.parse().ok()) {
+        opts.tolerance = t;
+    }
     let levels: usize = std::env::args().nth(4).map(|a| a.parse().expect("subdivisions")).unwrap_or(0);
     let par = std::env::args().nth(5).as_deref() == Some("par");
     let mut s = common::load(std::path::Path::new(&path));
@@ -50,8 +54,8 @@ fn main() {
         let a = a.expect("one repetition");
         match a {
             Ok(a) => println!(
-                "chart {} tris: {} iters, residual {:.2e}, stationarity {:.2e}, converged {}, active {}, {dt:.4} s (cpu {dcpu:.4} s)",
-                c.triangles.len(), a.iterations, a.residual, a.stationarity, a.converged, a.convex_active.len()
+                "chart {} tris: {} iters, {} factorizations, residual {:.2e}, stationarity {:.2e}, converged {}, active {}, {dt:.4} s (cpu {dcpu:.4} s)",
+                c.triangles.len(), a.iterations, a.factorizations, a.residual, a.stationarity, a.converged, a.convex_active.len()
             ),
             Err(e) => println!("chart {} tris: error {e:?}", c.triangles.len()),
         }

@@ -21,7 +21,7 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use numpy::{PyArray1, PyArrayMethods};
+use numpy::{PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyString, PyTuple};
 use uvflat_core::methods::{method_names, Method, OptionValue};
@@ -503,6 +503,46 @@ fn metrics(
     Ok(PyMetrics::from(m))
 }
 
+/// Convex hull of every island of a per-corner UV map (for island packing).
+///
+/// See the package documentation (`uvflat.island_hulls`) for the arguments.
+#[pyfunction]
+#[pyo3(signature = (uv, face_sizes, face_island, *, selected = None))]
+fn island_hulls<'py>(
+    py: Python<'py>,
+    uv: &Bound<'py, PyAny>,
+    face_sizes: &Bound<'py, PyAny>,
+    face_island: &Bound<'py, PyAny>,
+    selected: Option<&Bound<'py, PyAny>>,
+) -> PyResult<(Bound<'py, PyArray1<i64>>, Bound<'py, PyArray2<f64>>)> {
+    let uv = convert::float_rows::<2>(uv, "uv", "C")?;
+    let (face_sizes, _) = indices(face_sizes, "face_sizes", Layout::Vector("F"), |face, size| {
+        errors::input_error(py, "face_sizes", format!("face_sizes[{face}]: {size} is not a corner count"))
+    })?;
+    let (island, _) = indices(face_island, "face_island", Layout::Vector("F"), |face, k| {
+        errors::input_error(py, "face_island", format!("face_island[{face}]: {k} is not an island number"))
+    })?;
+    let selected = read_selected(selected)?;
+    if let Some(sel) = &selected {
+        if sel.len() != island.len() {
+            return Err(errors::input_error(
+                py,
+                "selected",
+                format!("selected: has {} entries, face_island has {}", sel.len(), island.len()),
+            ));
+        }
+    }
+    let face_island: Vec<i64> = match &selected {
+        None => island.iter().map(|&k| i64::from(k)).collect(),
+        Some(sel) => island.iter().zip(sel).map(|(&k, &s)| if s { i64::from(k) } else { -1 }).collect(),
+    };
+    let hulls = run_core(py, "uv", || uvflat_core::geometry::convex_hull::island_hulls(&uv, &face_sizes, &face_island))?;
+    let offsets = PyArray1::from_iter(py, hulls.offsets.iter().map(|&o| o as i64));
+    let n = hulls.points.len();
+    let points = PyArray1::from_vec(py, hulls.points.into_flattened()).reshape([n, 2])?;
+    Ok((offsets, points))
+}
+
 /// Raise the error a panic in the core turns into (lets the test-suite check that a panic
 /// never crosses into Python). Not part of the public API.
 #[pyfunction]
@@ -517,6 +557,7 @@ fn _uvflat(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(unwrap, m)?)?;
     m.add_function(wrap_pyfunction!(metrics, m)?)?;
     m.add_function(wrap_pyfunction!(factorization_seconds, m)?)?;
+    m.add_function(wrap_pyfunction!(island_hulls, m)?)?;
     m.add_function(wrap_pyfunction!(_internal_panic_check, m)?)?;
     m.add_class::<PyUnwrapResult>()?;
     m.add_class::<PyChartReport>()?;

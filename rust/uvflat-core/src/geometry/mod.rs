@@ -1,4 +1,7 @@
-//! What needs positions: corner angles (robust, clamped), areas, local 2D frames.
+//! What needs positions: corner angles (robust, clamped), areas, local 2D frames; and
+//! [`convex_hull`], planar hulls of point sets and of UV islands.
+
+pub mod convex_hull;
 
 /// Smallest corner angle (radians) a triangle is given when its 3D angles are used as
 /// targets. Degenerate (zero-area) triangles would otherwise have zero angles, infinite

@@ -37,6 +37,7 @@ from ._uvflat import (
     VertexIndexError,
     __version__,
     factorization_seconds,
+    island_hulls,
     metrics,
 )
 from ._uvflat import unwrap as _native_unwrap
@@ -62,6 +63,7 @@ __all__ = [
     "VertexIndexError",
     "__version__",
     "factorization_seconds",
+    "island_hulls",
     "metrics",
     "unwrap",
 ]

@@ -327,6 +327,35 @@ def factorization_seconds(
     this much is dominated by the factorization.
     """
 
+def island_hulls(
+    uv: _Floats,
+    face_sizes: _Ints,
+    face_island: _Ints,
+    *,
+    selected: _Bools | None = None,
+) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.float64]]:
+    """Convex hull of every island of a per-corner UV map, for island packing.
+
+    Island ``k`` holds the faces with ``face_island == k`` (and ``selected``, if given); its
+    hull is the convex hull of all their corner UVs, counter-clockwise, without collinear or
+    repeated vertices (Andrew's monotone chain). Islands run in parallel.
+
+    Args:
+        uv: (C, 2) UV of every corner.
+        face_sizes: (F,) corners per face.
+        face_island: (F,) island of every face, numbered below ``F``.
+        selected: (F,) faces that belong to their island; default all.
+
+    Returns:
+        ``(offsets, points)``: island ``k``'s hull is ``points[offsets[k]:offsets[k + 1]]``
+        (``offsets`` has one more entry than the largest island number). A hull is empty when
+        its island spans no area or holds a non-finite UV.
+
+    Raises:
+        InputError: wrong shape, dtype or length, a negative entry, or an island number not
+            below ``F`` (the message names the face).
+    """
+
 def metrics(
     positions: _Floats,
     corner_verts: _Ints,
