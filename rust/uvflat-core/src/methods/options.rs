@@ -78,7 +78,7 @@ const ABF: &[OptionSpec] = &[
     OptionSpec {
         name: "tolerance",
         kind: POSITIVE,
-        default: OptionDefault::Float(1e-9),
+        default: OptionDefault::Float(1e-5),
         doc: "largest violation of the angle constraints accepted",
     },
     OptionSpec {

@@ -48,7 +48,7 @@ class UnwrapOptions(TypedDict, total=False):
     max_iterations: int
     """spectral (200), abf (30), arap (100), slim (15), mips (50), scaffold (100); >= 1."""
     tolerance: float
-    """spectral (1e-10), abf (1e-9), arap (1e-6), slim (1e-4), mips (1e-6), scaffold (1e-4)."""
+    """spectral (1e-10), abf (1e-5), arap (1e-6), slim (1e-4), mips (1e-6), scaffold (1e-4)."""
     solver: Literal["abf++", "abf"]
     """abf: "abf++" (default, block elimination) or "abf" (the full system by sparse LU)."""
     angle_sums: tuple[npt.ArrayLike, npt.ArrayLike]

@@ -62,8 +62,16 @@
 //!
 //! Convergence: the iteration stops when the largest constraint residual (radians, or log
 //! units for the wheel condition) is below `tolerance` and the Lagrangian gradient, scaled to
-//! angle units (`|∂L/∂α_c| β_c² / 2`), is below `√tolerance` (3e-5 rad by default), so that
+//! angle units (`|∂L/∂α_c| β_c² / 2`), is below `√tolerance` (3e-3 rad by default), so that
 //! the angles are near the optimum, not merely consistent.
+//!
+//! The default tolerance, 1e-5, is set by what a UV map can show: on the shared meshes
+//! (camelhead whole and cut by Smart UV Project, beetle and 3holes cut so, halftunnel, lion,
+//! and bunny, fertility and cow with automatic seams) every UV is within 3.1e-7 of the chart's
+//! extent of the UVs reached at 1e-9, a couple of float32 steps (the UVs Blender stores), the
+//! conformal and area distortion agree to six digits and flips and overlaps are the same,
+//! while the solve takes 5–15 % less CPU time. Blender's own ABF stops far earlier (squared
+//! gradient norm below 1).
 //!
 //! Convex boundary ([`AbfBoundary::Convex`], in the spirit of R. Zayer, C. Rössl, H.-P. Seidel,
 //! "Convex boundary angle based flattening", VMV 2003: ABF with every boundary angle sum
@@ -212,7 +220,7 @@ pub struct AbfOptions {
     pub solver: AbfSolver,
     /// Most Newton iterations. Default 30.
     pub max_iterations: usize,
-    /// Stop when the largest constraint residual is below this. Default 1e-9.
+    /// Stop when the largest constraint residual is below this. Default 1e-5 (module docs).
     pub tolerance: f64,
     /// Boundary constraint. Default [`AbfBoundary::Free`].
     pub boundary: AbfBoundary,
@@ -227,7 +235,7 @@ impl Default for AbfOptions {
         AbfOptions {
             solver: AbfSolver::AbfPlusPlus,
             max_iterations: 30,
-            tolerance: 1e-9,
+            tolerance: 1e-5,
             boundary: AbfBoundary::Free,
             angle_sums: Vec::new(),
         }
