@@ -1323,5 +1323,8 @@ def test_island_hulls_report_islands_without_area_and_bad_input():
     with pytest.raises(uvflat.InputError) as err:
         uvflat.island_hulls(uv[:9], face_sizes, np.array([0, 1, 2]))
     assert err.value.argument == "uv"
+    # a negative island number puts a face in no island, as unwrap's chart of a face it left
+    offsets, _ = uvflat.island_hulls(uv, face_sizes, np.array([-1, 0, -1]))
+    assert list(np.diff(offsets)) == [0]
     with pytest.raises(uvflat.InputError):
-        uvflat.island_hulls(uv, face_sizes, np.array([0, -1, 2]))
+        uvflat.island_hulls(uv, face_sizes, np.array([0.0, 1.0, 2.0]))

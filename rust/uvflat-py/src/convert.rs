@@ -185,6 +185,25 @@ pub fn indices(
     Ok((out, rows))
 }
 
+/// A signed integer vector (any integer width; unsigned values above `i64::MAX` are refused),
+/// as `i64`.
+pub fn signed(obj: &Bound<'_, PyAny>, name: &str, layout: Layout) -> PyResult<Vec<i64>> {
+    let (arr, _) = checked(obj, name, layout, Family::Int)?;
+    if arr.dtype().kind() == b'u' && arr.dtype().itemsize() >= 8 {
+        return with_slice(&arr, "uint64", |s: &[u64]| {
+            s.iter()
+                .enumerate()
+                .map(|(i, &x)| {
+                    i64::try_from(x).map_err(|_| {
+                        error(arr.py(), Kind::Input, format!("{name}[{i}]: {x} is too large"), attrs![arr.py(); "argument" => name])
+                    })
+                })
+                .collect()
+        });
+    }
+    with_slice(&arr, "int64", |s: &[i64]| Ok(s.to_vec()))
+}
+
 /// Pair up a flat row-major buffer into fixed-size rows.
 pub fn rows<const K: usize, T: Copy + Default>(flat: &[T]) -> Vec<[T; K]> {
     flat.chunks_exact(K)

@@ -519,9 +519,7 @@ fn island_hulls<'py>(
     let (face_sizes, _) = indices(face_sizes, "face_sizes", Layout::Vector("F"), |face, size| {
         errors::input_error(py, "face_sizes", format!("face_sizes[{face}]: {size} is not a corner count"))
     })?;
-    let (island, _) = indices(face_island, "face_island", Layout::Vector("F"), |face, k| {
-        errors::input_error(py, "face_island", format!("face_island[{face}]: {k} is not an island number"))
-    })?;
+    let island = convert::signed(face_island, "face_island", Layout::Vector("F"))?;
     let selected = read_selected(selected)?;
     if let Some(sel) = &selected {
         if sel.len() != island.len() {
@@ -533,8 +531,8 @@ fn island_hulls<'py>(
         }
     }
     let face_island: Vec<i64> = match &selected {
-        None => island.iter().map(|&k| i64::from(k)).collect(),
-        Some(sel) => island.iter().zip(sel).map(|(&k, &s)| if s { i64::from(k) } else { -1 }).collect(),
+        None => island,
+        Some(sel) => island.iter().zip(sel).map(|(&k, &s)| if s { k } else { -1 }).collect(),
     };
     let hulls = run_core(py, "uv", || uvflat_core::geometry::convex_hull::island_hulls(&uv, &face_sizes, &face_island))?;
     let offsets = PyArray1::from_iter(py, hulls.offsets.iter().map(|&o| o as i64));

@@ -336,7 +336,8 @@ def island_hulls(
 ) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.float64]]:
     """Convex hull of every island of a per-corner UV map, for island packing.
 
-    Island ``k`` holds the faces with ``face_island == k`` (and ``selected``, if given); its
+    Island ``k`` holds the faces with ``face_island == k`` (and ``selected``, if given; a
+    negative ``face_island`` puts a face in no island, like ``UnwrapResult.chart``); its
     hull is the convex hull of all their corner UVs, counter-clockwise, without collinear or
     repeated vertices (Andrew's monotone chain). Islands run in parallel.
 
@@ -352,8 +353,8 @@ def island_hulls(
         its island spans no area or holds a non-finite UV.
 
     Raises:
-        InputError: wrong shape, dtype or length, a negative entry, or an island number not
-            below ``F`` (the message names the face).
+        InputError: wrong shape, dtype or length, or an island number not below ``F`` (the
+            message names the face).
     """
 
 def metrics(
