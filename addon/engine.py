@@ -298,7 +298,7 @@ def _solve(core, job: _Job, method, options, use_fit, progress=None):
     )
 
 
-def _write(job: _Job, phases=None):
+def _write(job: _Job, phases=None, color_kind=None):
     mesh = job.obj.data
     name, job.created_uv = mesh_io.ensure_uv_map(mesh)
     job.written = True  # from here on, _restore must undo this job
@@ -324,7 +324,7 @@ def _write(job: _Job, phases=None):
                        job.aspect)
     mesh_io.write_uv(mesh, job.uv_name, new_uv)
     job.quality = distortion.snapshot(mesh)
-    distortion.write(mesh, job.face_sizes, solved, *quality)
+    distortion.write(mesh, job.face_sizes, solved, *quality, color_kind=color_kind)
     mesh.update()
 
 
@@ -624,6 +624,15 @@ class Run:
             self.error = ex
 
 
+def heat_map_kind(context):
+    """The distortion the sidebar's heat map shows (``"conformal"`` or ``"area"``), or
+    ``None`` while it is hidden (the unwrap then writes no heat colours, see ``distortion``)."""
+    settings = getattr(getattr(context, "scene", None), "uvflat", None)
+    if settings is None or not getattr(settings, "show_distortion", False):
+        return None
+    return settings.distortion_kind
+
+
 def _lap(phases, name, t0):
     """Add the seconds since ``t0`` to phase ``name``."""
     phases[name] = phases.get(name, 0.0) + time.perf_counter() - t0
@@ -640,7 +649,7 @@ def _write_and_pack(context, run: Run) -> Summary:
             # 3. write (UVs, then the seams automatic seams cut)
             t0, quality = time.perf_counter(), phases.get("quality", 0.0)
             for job in jobs:
-                _write(job, phases)
+                _write(job, phases, heat_map_kind(context))
                 if run.mark_seams:
                     summary.seams_added += _mark_new_seams(job)
                 else:

@@ -62,7 +62,7 @@ def read_topology(mesh):
 
     Returns ``(positions (V,3) float64, corner_verts (C,) int32, face_sizes (F,) int32)``.
     """
-    n_v, n_c, n_f = len(mesh.vertices), len(mesh.loops), len(mesh.polygons)
+    n_v, n_c = len(mesh.vertices), len(mesh.loops)
     positions = _attribute(mesh, ("position",), n_v, np.float32, 3, "vector")
     if positions is None:
         positions = _get(mesh.vertices, "co", n_v, np.float32, 3)
@@ -70,13 +70,19 @@ def read_topology(mesh):
     corner_verts = _attribute(mesh, (".corner_vert",), n_c, np.int32)
     if corner_verts is None:
         corner_verts = _get(mesh.loops, "vertex_index", n_c, np.int32)
+    return positions, corner_verts, read_face_sizes(mesh)
+
+
+def read_face_sizes(mesh):
+    """Corners of every face, ``(F,)`` int32."""
+    n_c, n_f = len(mesh.loops), len(mesh.polygons)
     loop_start = _get(mesh.polygons, "loop_start", n_f, np.int32)
     face_sizes = np.diff(np.append(loop_start, np.int32(n_c))).astype(np.int32)
     if n_f and (loop_start[0] != 0 or np.any(face_sizes <= 0)):
         # Blender stores face corners contiguously in face order; anything else would make
         # per-corner arrays ambiguous, so refuse rather than guess.
         raise RuntimeError(f"mesh '{mesh.name}': face corners are not stored in face order")
-    return positions, corner_verts, face_sizes
+    return face_sizes
 
 
 def read_loop_triangles(mesh, face_sizes=None):

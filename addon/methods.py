@@ -131,7 +131,7 @@ OPTIONS: dict[str, OptionInfo] = {
         "Maximum Newton iterations of the angle solve (a chart that does not converge falls "
         "back to LSCM)", 30, 200),
     "abf_tolerance_exponent": _tolerance(
-        "Largest violation of the angle constraints accepted", -9, -14, -3),
+        "Largest violation of the angle constraints accepted", -5, -14, -3),
     "arap_iterations": _iterations("Maximum local/global iterations", 100, 1000),
     "arap_tolerance_exponent": _tolerance(
         "Stop when the energy changes by less than this (relative)", -6),

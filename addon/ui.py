@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import bpy
 
-from . import distortion, engine, methods
+from . import distortion, engine, mesh_io, methods
 from .operators import UV_OT_uvflat_select_flipped, UV_OT_uvflat_unwrap
 
 # Viewport colour type of each 3D view before the heat map replaced it (by space pointer).
@@ -14,15 +14,14 @@ _previous_color_type: dict[int, str] = {}
 
 def show_heat_map(context, show, kind):
     """Show (or stop showing) the distortion heat map: the meshes in edit mode (or the
-    selected ones) get the ``kind`` colour attribute as active colour, and every 3D view of
-    the screen shades solid colours by attribute."""
+    selected ones) get the heat colours of ``kind`` written from their stored per-face
+    measure as active colour attribute (``distortion.write_colors``; meshes in edit mode leave
+    it for the write and enter it again), and every 3D view of the screen shades solid colours
+    by attribute. Hiding it leaves the colours on the meshes (the next unwrap removes them)."""
     objects = [o for o in (getattr(context, "objects_in_mode", None) or
                            getattr(context, "selected_objects", None) or []) if o.type == "MESH"]
-    name = distortion.COLOR[kind]
-    for obj in objects:
-        colors = obj.data.color_attributes
-        if show and colors.get(name) is not None:
-            colors.active_color_name = name
+    if show and objects:
+        _write_heat_colors(context, objects, kind)
     screen = getattr(context, "screen", None)
     for area in (screen.areas if screen is not None else ()):
         if area.type != "VIEW_3D":
@@ -38,6 +37,22 @@ def show_heat_map(context, show, kind):
             elif key in _previous_color_type:
                 shading.color_type = _previous_color_type.pop(key)
         area.tag_redraw()
+
+
+def _write_heat_colors(context, objects, kind):
+    editing = [o for o in objects if o.mode == "EDIT"]
+    view_layer = getattr(context, "view_layer", None) or bpy.context.view_layer
+    active = view_layer.objects.active
+    if editing:
+        engine._leave_edit_mode(editing)
+    try:
+        for obj in objects:
+            mesh = obj.data
+            distortion.write_colors(mesh, mesh_io.read_face_sizes(mesh), kind)
+            mesh.update()
+    finally:
+        if editing:
+            engine._enter_edit_mode(view_layer, editing, active)
 
 
 def _update_heat_map(self, context):

@@ -1136,9 +1136,9 @@ def test_face_attributes_equal_uvflat_metrics(ext, scene):
     assert np.isnan(conformal[~sel]).all(), "faces never unwrapped have no measure"
     flipped = io.read_attribute(obj.data, "uvflat_flipped")
     assert flipped.shape == (len(sel),) and not flipped[~sel].any()
+    # the heat map is hidden (the default): no heat colours slow the mesh's edit mode down
     colors = obj.data.color_attributes
-    assert colors.get("uvflat_conformal_color") is not None
-    assert colors["uvflat_conformal_color"].domain == "CORNER"
+    assert colors.get("uvflat_conformal_color") is None and colors.get("uvflat_area_color") is None
 
 
 def test_heat_colors_scale(ext):
@@ -1183,13 +1183,69 @@ def test_heat_map_toggle_sets_and_restores_the_viewport(ext, scene):
     space = SimpleNamespace(type="VIEW_3D", shading=shading, as_pointer=lambda: 12345)
     area = SimpleNamespace(type="VIEW_3D", spaces=[space], tag_redraw=lambda: None)
     ctx = SimpleNamespace(objects_in_mode=[obj], screen=SimpleNamespace(areas=[area]))
+    dist, io = ext.distortion, ext.mesh_io
+    assert obj.data.color_attributes.get(dist.COLOR["area"]) is None
     ext.ui.show_heat_map(ctx, True, "area")
     assert shading.color_type == "ATTRIBUTE"
     assert obj.data.color_attributes.active_color_name == "uvflat_area_color"
+    # the colours are written from the stored per-face measure, one colour per corner
+    face_sizes = io.read_face_sizes(obj.data)
+    expected = dist._linear_heat_colors(io.read_attribute(obj.data, dist.AREA))
+    np.testing.assert_array_equal(io.read_attribute(obj.data, dist.COLOR["area"]),
+                                  np.repeat(expected, face_sizes, axis=0))
     ext.ui.show_heat_map(ctx, True, "conformal")
     assert obj.data.color_attributes.active_color_name == "uvflat_conformal_color"
+    assert obj.data.color_attributes.get(dist.COLOR["area"]) is None, "only the shown kind"
     ext.ui.show_heat_map(ctx, False, "conformal")
     assert shading.color_type == "OBJECT", "the viewport's own colour type is put back"
+
+
+def test_heat_map_on_a_mesh_in_edit_mode_keeps_it_in_edit_mode(ext, scene):
+    """Showing the heat map writes its colours from object mode: a mesh in edit mode leaves
+    it for the write and is back in edit mode, its selection unchanged, with the colours."""
+    obj = suzanne()
+    result, _ = unwrap(ext, [obj], method="lscm")
+    assert result == {"FINISHED"}
+    io, dist = ext.mesh_io, ext.distortion
+    selection = np.zeros(len(obj.data.polygons), dtype=bool)
+    selection[::3] = True
+    io.select_faces(obj.data, selection)
+    common.edit_mode([obj], select_all=False)
+    try:
+        ctx = SimpleNamespace(objects_in_mode=[obj], screen=None, view_layer=bpy.context.view_layer)
+        ext.ui.show_heat_map(ctx, True, "conformal")
+        assert obj.mode == "EDIT"
+    finally:
+        common.object_mode()
+    assert obj.data.color_attributes.active_color_name == dist.COLOR["conformal"]
+    colors = io.read_attribute(obj.data, dist.COLOR["conformal"])
+    assert colors.shape == (len(obj.data.loops), 4) and np.isfinite(colors).all()
+    np.testing.assert_array_equal(io.read_face_selection(obj.data), selection)
+
+
+def test_unwrap_writes_heat_colours_only_while_the_heat_map_shows(ext, scene):
+    obj = suzanne()
+    settings = bpy.context.scene.uvflat
+    dist, io = ext.distortion, ext.mesh_io
+    try:
+        for kind in ("area", "conformal"):
+            settings.show_distortion, settings.distortion_kind = True, kind
+            result, _ = unwrap(ext, [obj], method="lscm")
+            assert result == {"FINISHED"}
+            colors = obj.data.color_attributes
+            assert colors.active_color_name == dist.COLOR[kind]
+            other = "conformal" if kind == "area" else "area"
+            assert colors.get(dist.COLOR[other]) is None
+            expected = dist._linear_heat_colors(io.read_attribute(obj.data, {"area": dist.AREA, "conformal": dist.CONFORMAL}[kind]))
+            np.testing.assert_array_equal(io.read_attribute(obj.data, dist.COLOR[kind]),
+                                          np.repeat(expected, io.read_face_sizes(obj.data), axis=0))
+        settings.show_distortion = False
+        result, _ = unwrap(ext, [obj], method="lscm")
+        assert result == {"FINISHED"}
+        assert all(obj.data.color_attributes.get(n) is None for n in dist.COLOR.values()), \
+            "stale colours are removed when the heat map is hidden"
+    finally:
+        settings.show_distortion = False
 
 
 def _chart(id, status="solved", flips=0, overlap=False, conformal=1.0, reason=None):

@@ -216,12 +216,18 @@ def test_heat_map_colours_display_the_heat_colours(ext, scene):
     """The colour attributes are float colours (one bulk copy to write) holding the heat
     colours of the per-face distortion: read back as sRGB they are the heat colours."""
     obj = _disk("DiskHeat")
-    result, summary = unwrap(ext, [obj], method="lscm", pack="ALL")
-    assert result == {"FINISHED"}
     io, dist = ext.mesh_io, ext.distortion
-    _, _, face_sizes = io.read_topology(obj.data)
-    starts = np.concatenate([[0], np.cumsum(face_sizes)[:-1]])
+    settings = bpy.context.scene.uvflat
     for kind, name in ((dist.CONFORMAL, "conformal"), (dist.AREA, "area")):
+        settings.distortion_kind = name
+        settings.show_distortion = True
+        try:
+            result, summary = unwrap(ext, [obj], method="lscm", pack="ALL")
+        finally:
+            settings.show_distortion = False
+        assert result == {"FINISHED"}
+        _, _, face_sizes = io.read_topology(obj.data)
+        starts = np.concatenate([[0], np.cumsum(face_sizes)[:-1]])
         attr = obj.data.attributes[dist.COLOR[name]]
         assert attr.data_type == "FLOAT_COLOR" and attr.domain == "CORNER"
         expected = dist.heat_colors(io.read_attribute(obj.data, kind))
