@@ -3,7 +3,9 @@
 //!
 //! Properties checked: the refinement converges on every test chart (holes, quads, pins) and
 //! gives the LU's map to 1e-9; the map is flip-free; large charts' barrier starts use it and
-//! still match the LU map, and SLIM from it never flips and never increases its energy.
+//! still match the LU map, and SLIM from it never flips and never increases its energy. Also
+//! the staged choice of start ([`start::pick_staged`], which skips the mean value map when
+//! LSCM is near an isometry) against the choice among both candidates.
 
 mod common;
 
@@ -11,7 +13,9 @@ use common::*;
 use uvflat_core::charts::{build_charts, Chart};
 use uvflat_core::mesh::PolyMesh;
 use uvflat_core::methods::mean_value;
+use uvflat_core::methods::nonlinear::energy::{scale_optimally, symmetric_dirichlet};
 use uvflat_core::methods::nonlinear::start;
+use uvflat_core::methods::nonlinear::TriangleOperators;
 use uvflat_core::methods::slim::{self, SlimOptions};
 use uvflat_core::methods::BoundaryShape;
 
@@ -34,6 +38,17 @@ fn bumpy_disk(rings: usize, per_ring: usize) -> Soup {
     s
 }
 
+/// A disk lifted onto a paraboloid four times as deep as the disk is wide: a cup, far from
+/// developable (its conformal map shrinks the bottom against the rim).
+fn cup(rings: usize, per_ring: usize) -> Soup {
+    let mut s = planar_disk(rings, per_ring);
+    let r_max = s.positions.iter().map(|p| p[0].hypot(p[1])).fold(0.0, f64::max);
+    for p in s.positions.iter_mut() {
+        p[2] = 8.0 * (p[0] * p[0] + p[1] * p[1]) / r_max;
+    }
+    s
+}
+
 /// Smallest doubled signed area of the chart's triangles under `uv`.
 fn least_area(chart: &Chart, uv: &[[f64; 2]]) -> f64 {
     common::doubled_signed_areas(&chart.triangles, uv).into_iter().fold(f64::INFINITY, f64::min)
@@ -47,7 +62,11 @@ fn max_difference(a: &[[f64; 2]], b: &[[f64; 2]]) -> f64 {
 /// Every disk chart (with or without holes) of the synthetic cases and the shared meshes.
 fn disk_charts() -> Vec<(String, Chart)> {
     let (cyl, seams) = cut_cylinder(48, 12, 2.0);
-    let mut soups = vec![("bumpy_disk".to_string(), bumpy_disk(10, 7), vec![]), ("cut_cylinder (quads)".to_string(), cyl, seams)];
+    let mut soups = vec![
+        ("bumpy_disk".to_string(), bumpy_disk(10, 7), vec![]),
+        ("cup".to_string(), cup(10, 7), vec![]),
+        ("cut_cylinder (quads)".to_string(), cyl, seams),
+    ];
     match shared_meshes() {
         Some(dir) => {
             for f in MESHES {
@@ -114,4 +133,39 @@ fn large_charts_start_from_the_lean_map_and_slim_keeps_it_flip_free() {
     assert!(sol.fallback.is_none());
     assert!(least_area(&chart, &sol.uv) > 0.0, "SLIM flipped a triangle");
     assert!(history.energy.windows(2).all(|w| w[1] <= w[0]), "energy increased: {:?}", history.energy);
+}
+
+/// The staged start equals the choice among both candidates, except where it keeps a
+/// near-isometric LSCM without computing the mean value map: then it is within
+/// `NEAR_ISOMETRIC` of that choice's energy (every energy is at least 1). A developable chart
+/// (the cut cylinder) takes the staged shortcut, a deep cup does not.
+#[test]
+fn staged_start_is_the_better_candidate_or_near_isometric_lscm() {
+    let charts = disk_charts();
+    let mut shortcuts = Vec::new();
+    for (name, chart) in &charts {
+        let ops = TriangleOperators::new(&chart.positions, &chart.triangles);
+        let tris = &chart.triangles;
+        let prepare = |uv: &mut Vec<[f64; 2]>| scale_optimally(&ops, tris, uv);
+        let assess = |uv: &[[f64; 2]]| {
+            let e = symmetric_dirichlet(&ops, tris, uv);
+            if least_area(chart, uv) > 0.0 && e.is_finite() { Ok(e) } else { Err("flips".to_string()) }
+        };
+        let (candidates, mut rejected) = start::candidate_starts(chart, &[], true);
+        let both = start::pick(chart, candidates, &mut rejected, prepare, assess).expect("a valid start");
+        let staged = start::pick_staged(chart, &[], true, &mut Vec::new(), prepare, assess).expect("a valid start");
+        assert!(both.1 >= 1.0 - 1e-9 && staged.1 >= 1.0 - 1e-9, "{name}: energies {} {}", both.1, staged.1);
+        let n = chart.triangles.len();
+        let side_by_side = (start::SIDE_BY_SIDE_FROM..start::SEQUENTIAL_STARTS_FROM).contains(&n);
+        if staged.2 == "lscm" && staged.1 <= start::NEAR_ISOMETRIC && !side_by_side {
+            assert!(staged.1 <= start::NEAR_ISOMETRIC * both.1, "{name}: {} against {}", staged.1, both.1);
+            shortcuts.push(name.clone());
+        } else {
+            assert_eq!(staged.2, both.2, "{name}");
+            assert_eq!(staged.1, both.1, "{name}");
+            assert!(max_difference(&staged.0, &both.0) == 0.0, "{name}");
+        }
+    }
+    assert!(shortcuts.iter().any(|n| n.starts_with("cut_cylinder")), "the developable chart takes the shortcut: {shortcuts:?}");
+    assert!(!shortcuts.iter().any(|n| n.starts_with("cup")), "the curved chart computes both: {shortcuts:?}");
 }

@@ -39,7 +39,9 @@
 //!
 //! Start: a flip-free map. [`SlimStart::Auto`] (default) tries LSCM and the mean value map on
 //! a circle (Floater 2003, flip-free by Tutte's theorem) and keeps whichever has no
-//! non-positive triangle and the lower energy; [`SlimStart::MeanValue`] uses only the latter.
+//! non-positive triangle and the lower energy, computing the mean value map only when LSCM is
+//! not already within 5 % of an isometry ([`start::pick_staged`]);
+//! [`SlimStart::MeanValue`] uses only the latter.
 //! Without pins (or with pins that do not span more than a point) the start is scaled by the
 //! energy-optimal factor `(Σ A ‖J⁻¹‖² / Σ A ‖J‖²)^{1/4}` and translated onto the pin.
 //!
@@ -226,9 +228,7 @@ fn pick_start(chart: &Chart, pins: &[(u32, [f64; 2])], ops: &TriangleOperators, 
             }
         }
     }
-    let (candidates, more) = start::candidate_starts(chart, start_pins, options.start == SlimStart::Auto);
-    rejected.extend(more);
-    let best = start::pick(chart, candidates, &mut rejected, &mut prepare, &mut assess);
+    let best = start::pick_staged(chart, start_pins, options.start == SlimStart::Auto, &mut rejected, &mut prepare, &mut assess);
     (best, rejected)
 }
 

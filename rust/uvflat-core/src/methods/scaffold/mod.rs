@@ -53,8 +53,10 @@
 //! iteration.)
 //!
 //! Start: the valid map with the lower energy among LSCM and the mean value map on a circle
-//! (Floater 2003; an embedding by Tutte's theorem), each scaled by the energy-optimal factor.
-//! Valid: every triangle positive, no boundary self-overlap, and a scaffold can be built.
+//! (Floater 2003; an embedding by Tutte's theorem), each scaled by the energy-optimal factor,
+//! the latter computed only when LSCM is not within 5 % of an isometry
+//! ([`super::nonlinear::start::pick_staged`]). Valid: every triangle positive, no boundary
+//! self-overlap, and a scaffold can be built.
 //!
 //! Quads: the chart energy and the line search also cover the other diagonal's two triangles
 //! of every quad ([`crate::methods::barrier_triangles`]), so quads stay strictly convex.
@@ -163,15 +165,17 @@ pub struct ScaffoldHistory {
 type Start = (Vec<[f64; 2]>, f64, &'static str);
 
 /// The valid start with the lowest energy, each candidate scaled optimally: LSCM and the mean
-/// value map on a circle (Floater 2003, an embedding by Tutte's theorem up to round-off). Valid:
+/// value map on a circle (Floater 2003, an embedding by Tutte's theorem up to round-off), the
+/// latter only when LSCM is not near an isometry ([`start::pick_staged`]). Valid:
 /// every chart triangle positive, finite energy, no boundary self-overlap, and a scaffold can
 /// be built around it. `None` when no candidate is valid (the reasons are returned).
 fn pick_start(chart: &Chart, ops: &TriangleOperators) -> (Option<Start>, Vec<String>) {
     let tris = &chart.triangles;
-    let (candidates, mut rejected) = start::candidate_starts(chart, &[], true);
-    let best = start::pick(
+    let mut rejected = Vec::new();
+    let best = start::pick_staged(
         chart,
-        candidates,
+        &[],
+        true,
         &mut rejected,
         |uv| scale_optimally(ops, tris, uv),
         |uv| {
