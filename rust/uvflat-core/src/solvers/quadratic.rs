@@ -124,7 +124,7 @@ enum Slot {
 const DUPLICATE: u32 = 1 << 31;
 
 /// The entries `pairs` in compressed-column order (by column, then row), duplicates flagged
-/// with [`DUPLICATE`], as faer's `try_new_from_indices` orders them.
+/// with [`DUPLICATE`].
 fn compressed_order(ncols: usize, pairs: &[Pair<usize, usize>]) -> Vec<u32> {
     let mut start = vec![0usize; ncols + 1];
     for p in pairs {
@@ -235,22 +235,31 @@ impl<T: Scalar> FixedValueSolver<T> {
             slots.push(slot);
         }
         let nf = free.len();
-        let (ff_symbolic, _) = SymbolicSparseColMat::try_new_from_indices(nf, nf, &pairs)
-            .map_err(|e| SolveError::Other(format!("{e:?}")))?;
         if pairs.len() >= DUPLICATE as usize {
             return Err(SolveError::Other(format!("{} matrix entries exceed the solver's 2³¹ limit", pairs.len())));
         }
-        // Position of every entry in the compressed columns (duplicates summed into one), so
-        // that new values go straight to their place: 12 bytes per input triplet are kept.
+        // The compressed columns (duplicates summed into one) and the position of every entry
+        // in them, so that new values go straight to their place: 12 bytes per input triplet
+        // are kept. One counting sort by column, then each column's rows sorted.
         let mut position = vec![0u32; pairs.len()];
+        let mut col_ptr = vec![0usize; nf + 1];
+        let mut row_idx = Vec::new();
         let mut at = u32::MAX;
         for e in compressed_order(nf, &pairs) {
+            let i = (e & !DUPLICATE) as usize;
             if e & DUPLICATE == 0 {
                 at = at.wrapping_add(1);
+                row_idx.push(pairs[i].row);
+                col_ptr[pairs[i].col + 1] += 1;
             }
-            position[(e & !DUPLICATE) as usize] = at;
+            position[i] = at;
         }
         drop(pairs);
+        for c in 0..nf {
+            col_ptr[c + 1] += col_ptr[c];
+        }
+        row_idx.shrink_to_fit();
+        let ff_symbolic = SymbolicSparseColMat::new_checked(nf, nf, col_ptr, None, row_idx);
         for slot in slots.iter_mut() {
             if let Slot::FreeFree(k) = slot {
                 *k = position[*k as usize];
