@@ -83,14 +83,17 @@ pub fn fill_reducing(kind: OrderingKind, n: usize, col_ptr: &[usize], row_idx: &
         // No ordering can change the fill of a 1×1 or 2×2 factor (one-triangle charts).
         return Ok(Permutation::from_fwd((0..n).collect()));
     }
+    // The u and v of one vertex (unknowns 2k and 2k + 1 with the same neighbours) are ordered
+    // as one node: a quarter of the entries, the same elimination.
+    if let Some((bp, bi)) = interleaved_blocks(n, col_ptr, row_idx) {
+        let block = match kind.resolve(n) {
+            OrderingKind::Amd => amd(n / 2, &bp, &bi)?,
+            _ => nested_dissection(&Graph::from_pattern(n / 2, &bp, &bi))?,
+        };
+        let fwd = block.fwd.iter().flat_map(|&k| [2 * k, 2 * k + 1]).collect();
+        return Ok(Permutation::from_fwd(fwd));
+    }
     if kind.resolve(n) == OrderingKind::Amd {
-        // The u and v of one vertex (unknowns 2k and 2k + 1 with the same neighbours) are
-        // ordered as one node: AMD on a quarter of the entries, the same elimination.
-        if let Some((bp, bi)) = interleaved_blocks(n, col_ptr, row_idx) {
-            let block = amd(n / 2, &bp, &bi)?;
-            let fwd = block.fwd.iter().flat_map(|&k| [2 * k, 2 * k + 1]).collect();
-            return Ok(Permutation::from_fwd(fwd));
-        }
         return amd(n, col_ptr, row_idx);
     }
     let graph = Graph::from_pattern(n, col_ptr, row_idx);
