@@ -225,7 +225,7 @@ pub(crate) fn folds(chart: &Chart, uv: &[[f64; 2]]) -> (usize, bool) {
 }
 
 /// Whether solving `chart` again with its holes filled can give a map that folds less than
-/// `uv`, which folds as `open` (see [`folds`]), so that the second solve is worth its cost.
+/// `uv`, which folds as `open` (see `folds`), so that the second solve is worth its cost.
 ///
 /// The filled map is kept only when it folds strictly less. With flipped triangles it may
 /// (closing the holes removes the folds they cause, e.g. on halftunnel), so the answer is

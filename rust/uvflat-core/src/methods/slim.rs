@@ -30,7 +30,7 @@
 //! After the first iteration, [`SlimStep::Newton`] (default) replaces steps 1–2 by a projected
 //! Newton step (Teran, Sifakis, Irving & Fedkiw 2005; the analytic projection of Smith, Goes
 //! & Kim 2019, [`project_twist`]): per triangle the exact Hessian of the density with respect
-//! to J ([`density_derivatives`]) with its one possibly negative eigenvalue (the twist) set
+//! to J ([`super::nonlinear::hessian::symmetric_dirichlet_derivatives`]) with its one possibly negative eigenvalue (the twist) set
 //! to 0, mapped to the six corner unknowns, plus `1e-6 ·` the triangle's Laplacian (definite
 //! along the global rotation). Its pattern is SLIM's, so the symbolic analysis is shared. The
 //! SLIM proxy is a good global step far from the optimum; Newton converges much faster near

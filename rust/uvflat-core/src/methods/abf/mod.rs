@@ -421,7 +421,7 @@ pub fn solve(chart: &Chart, pins: &[(u32, [f64; 2])], options: &AbfOptions) -> R
 /// Without a mesh (`corners` empty) only the sum's finiteness and sign and duplicates are
 /// checked.
 ///
-/// Errors: [`UvError::AngleSum`] naming the entry and the vertex.
+/// Errors: [`crate::UvError::AngleSum`] naming the entry and the vertex.
 pub fn validate_angle_sums(sums: &[(u32, f64)], corners: &[u32]) -> crate::error::Result<()> {
     use crate::error::UvError;
     let bad = |entry: usize, vertex: u32, value: f64, reason: String| UvError::AngleSum { entry, vertex: vertex as u64, value, reason };

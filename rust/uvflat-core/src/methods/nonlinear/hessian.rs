@@ -42,7 +42,7 @@ pub fn symmetric_dirichlet_derivatives(j: Jacobian) -> ([f64; 4], [[f64; 4]; 4])
     (g, h)
 }
 
-/// Project the symmetric Dirichlet Hessian of [`density_derivatives`] onto the positive
+/// Project the symmetric Dirichlet Hessian of [`symmetric_dirichlet_derivatives`] onto the positive
 /// semidefinite cone, analytically (Smith, Goes & Kim, "Analytic eigensystems for isotropic
 /// distortion energies", 2019). For `J = U Σ Vᵀ` its eigenvectors are the two scalings
 /// `U diag(·) Vᵀ` (eigenvalues `2 + 6σᵢ⁻⁴ > 0`), the flip `U [[0,1],[1,0]] Vᵀ / √2`

@@ -81,7 +81,7 @@
 //! when there is none, the iterations stop and the last map — valid by the guarantee — is
 //! returned with a note. A global step whose matrix does not factor (round-off on large charts
 //! with many holes) is regularised by a proximal diagonal shift and retried
-//! ([`factor_regularised`]); when even that fails the iterations stop likewise. A chart that
+//! (`factor_regularised`); when even that fails the iterations stop likewise. A chart that
 //! stops before its first iteration is never reported solved: it keeps its valid start,
 //! marked as a fallback to that start's method with the reason and the energy reached.
 
