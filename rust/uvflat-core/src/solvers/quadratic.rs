@@ -123,33 +123,38 @@ enum Slot {
 /// Top bit of a [`compressed_order`] entry: a duplicate of the previous entry.
 const DUPLICATE: u32 = 1 << 31;
 
-/// The entries `pairs` in compressed-column order (by column, then row), duplicates flagged
-/// with [`DUPLICATE`].
-fn compressed_order(ncols: usize, pairs: &[Pair<usize, usize>]) -> Vec<u32> {
-    let mut start = vec![0usize; ncols + 1];
-    for p in pairs {
-        start[p.col + 1] += 1;
+/// The entries `pairs` (indices below `n`, fewer than 2³¹ of them) in compressed-column order
+/// (by column, then row), duplicates flagged with [`DUPLICATE`]: two stable counting sorts,
+/// by row and then by column, without comparisons.
+fn compressed_order(n: usize, pairs: &[Pair<usize, usize>]) -> Vec<u32> {
+    fn by(n: usize, pairs: &[Pair<usize, usize>], key: impl Fn(&Pair<usize, usize>) -> usize, input: impl Iterator<Item = u32>) -> Vec<u32> {
+        let mut start = vec![0u32; n + 1];
+        for p in pairs {
+            start[key(p) + 1] += 1;
+        }
+        for c in 0..n {
+            start[c + 1] += start[c];
+        }
+        let mut out = vec![0u32; pairs.len()];
+        for i in input {
+            let k = key(&pairs[i as usize]);
+            out[start[k] as usize] = i;
+            start[k] += 1;
+        }
+        out
     }
-    for c in 0..ncols {
-        start[c + 1] += start[c];
-    }
-    let mut next = start.clone();
-    let mut order = vec![0usize; pairs.len()];
-    for (i, p) in pairs.iter().enumerate() {
-        order[next[p.col]] = i;
-        next[p.col] += 1;
-    }
-    for w in start.windows(2) {
-        order[w[0]..w[1]].sort_unstable_by_key(|&i| (pairs[i].row, pairs[i].col));
-    }
-    let mut out = Vec::with_capacity(order.len());
+    let by_row = by(n, pairs, |p| p.row, 0..pairs.len() as u32);
+    let mut order = by(n, pairs, |p| p.col, by_row.into_iter());
     let mut prev = (usize::MAX, usize::MAX);
-    for &i in &order {
-        let key = (pairs[i].row, pairs[i].col);
-        out.push(i as u32 | if key == prev { DUPLICATE } else { 0 });
+    for e in order.iter_mut() {
+        let p = &pairs[*e as usize];
+        let key = (p.col, p.row);
+        if key == prev {
+            *e |= DUPLICATE;
+        }
         prev = key;
     }
-    out
+    order
 }
 
 /// The quadratic-with-fixed-values solver (see the module docs).
