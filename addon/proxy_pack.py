@@ -42,12 +42,22 @@ PROXY_NAME = "uvflat pack proxy"
 
 
 @dataclass
+class PackedCorners:
+    """The packed corners of one mesh and the island (index in the list of :func:`islands`)
+    of each: shared by all the islands of that mesh."""
+
+    corners: np.ndarray   # (K,) corner indices in the mesh
+    island: np.ndarray    # (K,) island of each
+
+
+@dataclass
 class Island:
-    """One island to pack: whose corners, and its convex hull in UV (counter-clockwise)."""
+    """One island to pack: its mesh, its convex hull in UV (counter-clockwise) and its
+    mesh's packed corners."""
 
     job: object
-    corners: np.ndarray   # (K,) corner indices of the island in its mesh
     hull: np.ndarray      # (H,2) float64, H >= 3, positive area
+    members: PackedCorners
 
 
 def applicable(settings, n_islands: int, locked: bool, aspects, n_faces: int) -> bool:
@@ -58,15 +68,6 @@ def applicable(settings, n_islands: int, locked: bool, aspects, n_faces: int) ->
     if n_faces < MIN_FACES:
         return False
     return settings.shape_method in ("AABB", "CONVEX") or n_islands == 1
-
-
-def _grouped(corners, corner_island, n_islands):
-    """``corners`` ordered by island (``corner_island``: their island numbers, below
-    ``n_islands`` <= :data:`MAX_ISLANDS`) and where each island's run starts."""
-    if n_islands == 1:
-        return corners, np.zeros(1, dtype=np.int64)
-    order = np.argsort(corner_island.astype(np.int16), kind="stable")
-    return corners[order], np.searchsorted(corner_island[order], np.arange(n_islands))
 
 
 def islands(core, jobs_faces, uvs):
@@ -89,11 +90,9 @@ def islands(core, jobs_faces, uvs):
         offsets, points = core.island_hulls(uvs[id(job)], face_sizes, island, selected=faces)
         if np.any(np.diff(offsets) < 3):
             return None
-        corner_in = np.repeat(faces, face_sizes)
-        members, cut = _grouped(np.flatnonzero(corner_in), np.repeat(island, face_sizes)[corner_in], len(ids))
-        ends = np.append(cut[1:], len(members))
-        for k in range(len(ids)):
-            out.append(Island(job, members[cut[k]:ends[k]], points[offsets[k]:offsets[k + 1]]))
+        corners = np.flatnonzero(np.repeat(faces, face_sizes))
+        members = PackedCorners(corners, np.repeat(island, face_sizes)[corners] + len(out))
+        out.extend(Island(job, points[offsets[k]:offsets[k + 1]], members) for k in range(len(ids)))
     return out
 
 
@@ -160,19 +159,15 @@ def pack(context, islands_, settings, enter_edit_mode, leave_edit_mode):
 def apply(islands_, transforms, uvs):
     """Move every island's corners in ``uvs`` (job id -> (C,2) float32, changed in place),
     all islands of a mesh in one vectorised step (in float64)."""
+    a_all = np.array([t[0] for t in transforms], dtype=np.complex128)
+    b_all = np.array([t[1] for t in transforms], dtype=np.complex128)
     per_job = {}
-    for isl, (a, b) in zip(islands_, transforms):
-        per_job.setdefault(id(isl.job), []).append((isl.corners, a, b))
-    for key, parts in per_job.items():
+    for isl in islands_:
+        per_job.setdefault(id(isl.job), isl.members)
+    for key, members in per_job.items():
         uv = uvs[key]
-        if len(parts) == 1 and len(parts[0][0]) == len(uv):
-            corners = slice(None)
-            a, b = parts[0][1], parts[0][2]
-        else:
-            corners = np.concatenate([p[0] for p in parts])
-            counts = [len(p[0]) for p in parts]
-            a = np.repeat(np.array([p[1] for p in parts]), counts)
-            b = np.repeat(np.array([p[2] for p in parts]), counts)
+        corners = members.corners
+        a, b = a_all[members.island], b_all[members.island]
         u = uv[corners, 0].astype(np.float64)
         v = uv[corners, 1].astype(np.float64)
         uv[corners, 0] = a.real * u - a.imag * v + b.real
