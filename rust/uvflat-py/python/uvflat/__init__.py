@@ -125,7 +125,7 @@ def unwrap(positions, corner_verts, face_sizes, *, method="lscm", seams=None, se
             * spectral: ``max_iterations`` (int >= 1, default 200), ``tolerance`` (float,
               default 1e-10).
             * abf: ``solver`` "abf++" (default) or "abf"; ``boundary`` "free" (default) or
-              "convex"; ``max_iterations`` (default 30); ``tolerance`` (default 1e-9);
+              "convex"; ``max_iterations`` (default 30); ``tolerance`` (default 1e-5);
               ``angle_sums=(vertices, sums)``: (K,) mesh vertex indices and (K,) angle sums
               in radians the flattened map must have there (pi keeps a boundary straight,
               pi/2 makes a right-angled corner; an interior sum other than 2*pi is a cone).
