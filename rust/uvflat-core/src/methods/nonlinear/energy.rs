@@ -67,18 +67,26 @@ pub fn weighted_sum(
     uv: &[[f64; 2]],
     density: impl Fn(Jacobian) -> f64 + Sync,
 ) -> f64 {
-    triangles
-        .par_iter()
-        .enumerate()
-        .with_min_len(2048)
-        .map(|(f, t)| {
-            let w = weight[f];
-            if w == 0.0 {
-                return 0.0;
-            }
-            w * density(ops.jacobian(f, t, uv))
-        })
-        .sum()
+    ordered_sum(triangles.len(), |f| {
+        let w = weight[f];
+        if w == 0.0 {
+            return 0.0;
+        }
+        w * density(ops.jacobian(f, &triangles[f], uv))
+    })
+}
+
+/// Triangles per partial sum of [`ordered_sum`].
+const SUM_CHUNK: usize = 2048;
+
+/// `Σ_{f < n} term(f)`, in parallel but with the same rounding on any number of threads:
+/// fixed chunks of [`SUM_CHUNK`] terms summed in order, then their sums in order. (A plain
+/// parallel sum splits by the threads' work stealing, so a tolerance test on the energy could
+/// stop after a different iteration on one thread than on two.)
+pub fn ordered_sum(n: usize, term: impl Fn(usize) -> f64 + Sync) -> f64 {
+    let partial: Vec<f64> =
+        (0..n.div_ceil(SUM_CHUNK)).into_par_iter().map(|k| (k * SUM_CHUNK..((k + 1) * SUM_CHUNK).min(n)).map(&term).sum()).collect();
+    partial.iter().sum()
 }
 
 /// `Σ A_f · density(J_f)` with the operators' rest areas as weights.
@@ -113,16 +121,15 @@ pub fn arap_energy(ops: &TriangleOperators, triangles: &[[u32; 3]], uv: &[[f64; 
 /// `area_and_jacobian`: the best uniform scale of a map for the symmetric Dirichlet energy.
 /// Not finite for a map with a degenerate triangle.
 pub fn optimal_scale(n: usize, area_and_jacobian: impl Fn(usize) -> (f64, Jacobian) + Sync) -> f64 {
-    let (p, q) = (0..n)
-        .into_par_iter()
-        .with_min_len(2048)
-        .map(|f| {
-            let (a, j) = area_and_jacobian(f);
-            let det = det(j);
-            let fro = frobenius2(j);
-            (a * fro, a * fro / (det * det))
-        })
-        .reduce(|| (0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
+    let p = ordered_sum(n, |f| {
+        let (a, j) = area_and_jacobian(f);
+        a * frobenius2(j)
+    });
+    let q = ordered_sum(n, |f| {
+        let (a, j) = area_and_jacobian(f);
+        let d = det(j);
+        a * frobenius2(j) / (d * d)
+    });
     (q / p).sqrt().sqrt()
 }
 
