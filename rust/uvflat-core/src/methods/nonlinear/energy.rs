@@ -82,11 +82,20 @@ const SUM_CHUNK: usize = 2048;
 /// `Σ_{f < n} term(f)`, in parallel but with the same rounding on any number of threads:
 /// fixed chunks of [`SUM_CHUNK`] terms summed in order, then their sums in order. (A plain
 /// parallel sum splits by the threads' work stealing, so a tolerance test on the energy could
-/// stop after a different iteration on one thread than on two.)
+/// stop after a different iteration on one thread than on two.) One chunk or less is summed
+/// right here, without rayon.
 pub fn ordered_sum(n: usize, term: impl Fn(usize) -> f64 + Sync) -> f64 {
-    let partial: Vec<f64> =
-        (0..n.div_ceil(SUM_CHUNK)).into_par_iter().map(|k| (k * SUM_CHUNK..((k + 1) * SUM_CHUNK).min(n)).map(&term).sum()).collect();
-    partial.iter().sum()
+    ordered_fold(n, 0.0, term, |a, b| a + b)
+}
+
+/// [`ordered_sum`] of values of any type with `add` and its neutral `zero`.
+fn ordered_fold<T: Copy + Send + Sync>(n: usize, zero: T, term: impl Fn(usize) -> T + Sync, add: impl Fn(T, T) -> T + Sync) -> T {
+    let chunk = |k: usize| (k * SUM_CHUNK..((k + 1) * SUM_CHUNK).min(n)).fold(zero, |s, f| add(s, term(f)));
+    if n <= SUM_CHUNK {
+        return chunk(0);
+    }
+    let partial: Vec<T> = (0..n.div_ceil(SUM_CHUNK)).into_par_iter().map(chunk).collect();
+    partial.into_iter().fold(zero, &add)
 }
 
 /// `Σ A_f · density(J_f)` with the operators' rest areas as weights.
@@ -121,15 +130,17 @@ pub fn arap_energy(ops: &TriangleOperators, triangles: &[[u32; 3]], uv: &[[f64; 
 /// `area_and_jacobian`: the best uniform scale of a map for the symmetric Dirichlet energy.
 /// Not finite for a map with a degenerate triangle.
 pub fn optimal_scale(n: usize, area_and_jacobian: impl Fn(usize) -> (f64, Jacobian) + Sync) -> f64 {
-    let p = ordered_sum(n, |f| {
-        let (a, j) = area_and_jacobian(f);
-        a * frobenius2(j)
-    });
-    let q = ordered_sum(n, |f| {
-        let (a, j) = area_and_jacobian(f);
-        let d = det(j);
-        a * frobenius2(j) / (d * d)
-    });
+    let (p, q) = ordered_fold(
+        n,
+        (0.0, 0.0),
+        |f| {
+            let (a, j) = area_and_jacobian(f);
+            let det = det(j);
+            let fro = frobenius2(j);
+            (a * fro, a * fro / (det * det))
+        },
+        |a, b| (a.0 + b.0, a.1 + b.1),
+    );
     (q / p).sqrt().sqrt()
 }
 
