@@ -113,7 +113,7 @@ pub(super) fn step_plus_plus(w: &mut PlusPlus, p: &Problem<'_>, e: &Eval, mode: 
             let mut q = 0;
             for i in 0..len {
                 for j in 0..=i {
-                    w.vals[slots[q] as usize] += g[i][0] * u[j][0] + g[i][1] * u[j][1] + g[i][2] * u[j][2] - sj[i] * sj[j] * dinv;
+                    w.vals[p.slot(fr.rows[i].0, fr.rows[j].0, slots[q])] += g[i][0] * u[j][0] + g[i][1] * u[j][1] + g[i][2] * u[j][2] - sj[i] * sj[j] * dinv;
                     q += 1;
                 }
             }
