@@ -203,6 +203,8 @@ pub(super) struct FaceEval {
     pub(super) hess: [f64; 3],
     /// Triangle residual: angle sum − π.
     pub(super) c_tri: f64,
+    /// log sin α per corner (the wheel rows' residual terms).
+    pub(super) log_sin: [f64; 3],
 }
 
 /// Residuals and Newton ingredients at the current state.
@@ -239,17 +241,17 @@ pub(super) fn evaluate_into(p: &Problem<'_>, s: &State, e: &mut Eval) {
     let mut faces = std::mem::take(&mut e.faces);
     faces.clear();
     faces.resize(nf, FaceEval::default());
-    // The largest scaled gradient is reduced in the loop, and the wheel rows' log sin terms
-    // recomputed in the sequential row sums below, so that the kept per-triangle evaluation
-    // holds only what the Newton step reads (80 bytes per triangle).
+    // The largest scaled gradient is reduced in the loop, not stored per triangle.
     let stationarity = for_faces_max(&mut faces, |f, fe| {
         let a = [s.alpha[3 * f], s.alpha[3 * f + 1], s.alpha[3 * f + 2]];
         let mut sn = [0.0; 3];
         let mut ct = [0.0; 3];
+        let mut ls = [0.0; 3];
         for k in 0..3 {
             let (si, co) = a[k].sin_cos();
             sn[k] = si;
             ct[k] = co / si;
+            ls[k] = si.ln();
         }
         let mut grad = [0.0; 3];
         let mut hess = [0.0; 3];
@@ -307,23 +309,19 @@ pub(super) fn evaluate_into(p: &Problem<'_>, s: &State, e: &mut Eval) {
             hess = fallback_hess;
         }
         fe.cot = ct;
+        fe.log_sin = ls;
         fe.grad = grad;
         fe.hess = hess;
         fe.c_tri = a[0] + a[1] + a[2] - PI;
         stat
     });
     let mut c_row: Vec<f64> = p.rows.iter().zip(&p.target).map(|(row, t)| if row.wheel { 0.0 } else { -t }).collect();
-    for f in 0..nf {
+    for (f, fe) in faces.iter().enumerate() {
         let fr = p.face_rows(f);
-        let a = &s.alpha[3 * f..3 * f + 3];
-        let mut ls = [0.0; 3];
-        if fr.rows[..fr.len as usize].iter().any(|row| row.1) {
-            ls = [a[0].sin().ln(), a[1].sin().ln(), a[2].sin().ln()];
-        }
         for &(r, wheel, k) in &fr.rows[..fr.len as usize] {
             let k = k as usize;
             // The row's term of this triangle: log sin α_{k+2} − log sin α_{k+1}, or α_k.
-            let term = if wheel { ls[(k + 2) % 3] - ls[(k + 1) % 3] } else { a[k] };
+            let term = if wheel { fe.log_sin[(k + 2) % 3] - fe.log_sin[(k + 1) % 3] } else { s.alpha[3 * f + k] };
             c_row[r as usize] += term;
         }
     }
@@ -483,7 +481,7 @@ mod tests {
         let bits = |x: &[f64]| x.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
         assert_eq!(bits(&reused.c_newton), bits(&e.c_newton));
         for (a, b) in reused.faces.iter().zip(&e.faces) {
-            for (x, y) in [(&a.cot, &b.cot), (&a.grad, &b.grad), (&a.hess, &b.hess)] {
+            for (x, y) in [(&a.cot, &b.cot), (&a.grad, &b.grad), (&a.hess, &b.hess), (&a.log_sin, &b.log_sin)] {
                 assert_eq!(bits(x), bits(y));
             }
             assert_eq!(a.c_tri.to_bits(), b.c_tri.to_bits());

@@ -93,8 +93,15 @@ pub(super) const MAX_ROWS: usize = 8_000_000;
 pub(super) struct Reduced {
     pub(super) symbolic: faer::sparse::linalg::cholesky::SymbolicCholesky<u32>,
     pub(super) l_values: Vec<f64>,
+    /// Workspace of the solves (small); the factorization's own (about 100 bytes per row on
+    /// large charts) is allocated by [`Reduced::factor`] and freed when it returns, so that it
+    /// is not kept beside the factor through the rest of the step.
     pub(super) mem: faer::dyn_stack::MemBuffer,
 }
+
+/// Sequential: faer's supernodal Cholesky is left-looking and parallel only inside its dense
+/// blocks, which measured slower than sequential at 22k and 363k triangles.
+const PAR: faer::Par = faer::Par::Seq;
 
 impl Reduced {
     pub(super) fn new(p: &Problem<'_>) -> Result<Self, SolveError> {
@@ -114,25 +121,25 @@ impl Reduced {
         // so the default is kept.
         let symbolic = factorize_symbolic_cholesky(a, faer::Side::Upper, SymmetricOrdering::Custom(perm), CholeskySymbolicParams::default())
             .map_err(|e| other(&e))?;
-        // Sequential: faer's supernodal Cholesky is left-looking and parallel only inside its
-        // dense blocks, which measured slower than sequential at 22k and 363k triangles.
-        let par = faer::Par::Seq;
-        let req = symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()).or(symbolic.solve_in_place_scratch::<f64>(1, par));
-        let mem = faer::dyn_stack::MemBuffer::try_new(req).map_err(|e| other(&e))?;
+        let mem = faer::dyn_stack::MemBuffer::try_new(symbolic.solve_in_place_scratch::<f64>(1, PAR)).map_err(|e| other(&e))?;
         let l_values = vec![0.0; symbolic.len_val()];
         Ok(Reduced { symbolic, l_values, mem })
     }
 
     /// Numeric factorization for `values` on the pattern of `p`.
+    ///
+    /// Failures: the matrix is not positive definite, or its workspace cannot be allocated.
     pub(super) fn factor(&mut self, p: &Problem<'_>, values: &[f64]) -> Result<(), SolveError> {
         let m = p.m();
         let a = faer::sparse::SparseColMatRef::new(
             faer::sparse::SymbolicSparseColMatRef::new_checked(m, m, &p.col_ptr, None, &p.row_idx),
             values,
         );
-        let stack = faer::dyn_stack::MemStack::new(&mut self.mem);
+        let req = self.symbolic.factorize_numeric_llt_scratch::<f64>(PAR, Default::default());
+        let mut mem = faer::dyn_stack::MemBuffer::try_new(req).map_err(|e| SolveError::Other(format!("{e:?}")))?;
+        let stack = faer::dyn_stack::MemStack::new(&mut mem);
         self.symbolic
-            .factorize_numeric_llt(&mut self.l_values, a, faer::Side::Upper, Default::default(), faer::Par::Seq, stack, Default::default())
+            .factorize_numeric_llt(&mut self.l_values, a, faer::Side::Upper, Default::default(), PAR, stack, Default::default())
             .map(|_| ())
             .map_err(|_| SolveError::NotPositiveDefinite)
     }
@@ -142,7 +149,7 @@ impl Reduced {
         let m = rhs.len();
         let llt = faer::sparse::linalg::cholesky::LltRef::new(&self.symbolic, &self.l_values);
         let stack = faer::dyn_stack::MemStack::new(&mut self.mem);
-        llt.solve_in_place_with_conj(faer::Conj::No, faer::MatMut::from_column_major_slice_mut(rhs, m, 1), faer::Par::Seq, stack);
+        llt.solve_in_place_with_conj(faer::Conj::No, faer::MatMut::from_column_major_slice_mut(rhs, m, 1), PAR, stack);
         if rhs.iter().all(|x| x.is_finite()) {
             Ok(())
         } else {
