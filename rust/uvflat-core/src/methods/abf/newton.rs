@@ -44,8 +44,18 @@ impl Linear {
         }
     }
 
+    /// After a step that refactored, taken from the state `e` evaluates: keep `e`'s
+    /// Jacobian for chord steps (ABF++; stored only once the step is taken and freed, which
+    /// keeps it out of the step's peak memory).
+    pub(super) fn keep_jacobian(&mut self, e: &Eval) {
+        if let Linear::PlusPlus(w) = self {
+            w.jac = Vec::with_capacity(e.faces.len());
+            w.jac.extend(e.faces.iter().map(|fe| (fe.cot, fe.hess)));
+        }
+    }
+
     /// The step at `e`, the evaluation of `s` (ABF++ frees and recomputes it around a
-    /// factorization: [`PlusPlus`]).
+    /// factorization: [`PlusPlus`]); after a refactoring step, [`Linear::keep_jacobian`].
     pub(super) fn step(&mut self, p: &Problem<'_>, s: &State, e: &mut Eval, mode: Mode) -> Result<Step, SolveError> {
         match self {
             Linear::PlusPlus(w) => step_plus_plus(w, p, s, e, mode),
@@ -59,9 +69,9 @@ impl Linear {
 ///
 /// Memory: the factor is the largest allocation of the solve and stays for chord steps, so
 /// what only one step needs is allocated per step and freed as early as possible: the matrix
-/// values once factored, the per-triangle elimination terms once the step is
-/// back-substituted, the factorization's workspace after it ([`Reduced::factor`]). The
-/// Jacobian of the previous factorization is freed before the next one and stored after it.
+/// values once factored, the factorization's workspace after it ([`Reduced::factor`]); the
+/// per-triangle elimination terms are recomputed where used. The Jacobian of the previous
+/// factorization is freed before the next one and stored once the step is taken.
 /// On charts of at least [`LEAN_EVAL_FACES`] triangles the per-triangle evaluation is also
 /// freed while the matrix is factored and recomputed from the state after (bit for bit the
 /// same; one more evaluation per factorization: 3 % more time at 90k triangles, within the
@@ -90,7 +100,7 @@ pub(super) fn step_plus_plus(w: &mut PlusPlus, p: &Problem<'_>, s: &State, e: &m
     // Reduced matrix values on the pattern (refactoring steps only).
     let mut vals = Vec::new();
     if refresh {
-        // This step's Jacobian is `e`'s, stored once the step is taken.
+        // This step's Jacobian is `e`'s, kept once the step is taken ([`Linear::keep_jacobian`]).
         w.jac = Vec::new();
         vals.resize(p.row_idx.len(), 0.0);
         for (r, &d) in e.diag.iter().enumerate() {
@@ -99,19 +109,11 @@ pub(super) fn step_plus_plus(w: &mut PlusPlus, p: &Problem<'_>, s: &State, e: &m
             }
         }
     }
-    // Per triangle: 1 / 1ᵀΛ⁻¹1 and C_tri − 1ᵀΛ⁻¹∇α L.
-    let mut dinv = vec![0.0; nf];
-    let mut r1 = vec![0.0; nf];
     let jac_of = |e: &Eval, f: usize| if mode == Mode::Chord { w.jac[f] } else { (e.faces[f].cot, e.faces[f].hess) };
     for f in 0..nf {
         let fe = &e.faces[f];
         let (cot, hess) = jac_of(e, f);
-        let li = [1.0 / hess[0], 1.0 / hess[1], 1.0 / hess[2]];
-        let lb = [li[0] * fe.grad[0], li[1] * fe.grad[1], li[2] * fe.grad[2]];
-        let di = 1.0 / (li[0] + li[1] + li[2]);
-        let rr = fe.c_tri - (lb[0] + lb[1] + lb[2]);
-        dinv[f] = di;
-        r1[f] = rr;
+        let (li, lb, di, rr) = eliminate(fe, &hess);
         let fr = p.face_rows(f);
         let len = fr.len as usize;
         let mut g = [[0.0; 3]; MAX_FACE_ROWS];
@@ -170,20 +172,27 @@ pub(super) fn step_plus_plus(w: &mut PlusPlus, p: &Problem<'_>, s: &State, e: &m
                 jt[q] += g[q] * x;
             }
         }
-        let li = [1.0 / hess[0], 1.0 / hess[1], 1.0 / hess[2]];
+        let (li, _, di, rr) = eliminate(fe, &hess);
         let ej = li[0] * jt[0] + li[1] * jt[1] + li[2] * jt[2];
-        let dtf = (r1[f] - ej) * dinv[f];
+        let dtf = (rr - ej) * di;
         st.dt = dtf;
         for q in 0..3 {
             st.da[q] = -li[q] * (fe.grad[q] + dtf + jt[q]);
         }
     });
-    drop((dinv, r1));
-    if refresh {
-        w.jac.reserve_exact(nf);
-        w.jac.extend(e.faces.iter().map(|fe| (fe.cot, fe.hess)));
-    }
     Ok((steps, dl))
+}
+
+/// One triangle's elimination terms for its Hessian `hess`: `Λ⁻¹` (per corner), `Λ⁻¹∇α L`,
+/// `1 / 1ᵀΛ⁻¹1` and `C_tri − 1ᵀΛ⁻¹∇α L`. Computed where used (assembly and back-substitution,
+/// the same arithmetic), not stored.
+#[inline]
+fn eliminate(fe: &FaceEval, hess: &[f64; 3]) -> ([f64; 3], [f64; 3], f64, f64) {
+    let li = [1.0 / hess[0], 1.0 / hess[1], 1.0 / hess[2]];
+    let lb = [li[0] * fe.grad[0], li[1] * fe.grad[1], li[2] * fe.grad[2]];
+    let dinv = 1.0 / (li[0] + li[1] + li[2]);
+    let rr = fe.c_tri - (lb[0] + lb[1] + lb[2]);
+    (li, lb, dinv, rr)
 }
 
 /// Plain ABF: the full KKT system by sparse LU.
@@ -298,6 +307,7 @@ pub(super) fn newton(p: &Problem<'_>, s: &mut State, opts: &AbfOptions) -> Resul
         refactor_next = false;
         apply_step(p, s, &step, &e, opts.tolerance);
         drop(step);
+        lin.keep_jacobian(&e);
         evaluate_into(p, s, &mut e);
         it += 1;
     }
@@ -439,6 +449,9 @@ mod tests {
                 bits.extend(dl.iter().map(|x| x.to_bits()));
                 bits.extend(e.faces.iter().flat_map(|fe| fe.grad.iter().chain(&fe.hess).map(|x| x.to_bits())));
                 apply_step(&p, &mut s, &(steps, dl), &e, 1e-9);
+                if mode == Mode::Factor {
+                    w.jac = e.faces.iter().map(|fe| (fe.cot, fe.hess)).collect();
+                }
                 evaluate_into(&p, &s, &mut e);
             }
             assert!(e.residual < 1e-6, "the steps converge (residual {:.3e})", e.residual);
