@@ -4,14 +4,15 @@
 //! buffers, runs the core without the GIL (`Python::detach`) and inside `catch_unwind`, maps
 //! every [`UvError`] to its Python exception and returns numpy arrays. No numerics here.
 
+mod alloc;
 mod convert;
 
-/// mimalloc instead of the system allocator: an unwrap of thousands of small charts makes
-/// millions of small allocations across the worker threads, which glibc's allocator serves
-/// by growing and trimming its heaps (page faults and zeroing) — measured 1.3–1.6× slower
-/// end to end on a 47k-chart mesh.
+/// mimalloc for small blocks (an unwrap of thousands of small charts makes millions of small
+/// allocations across the worker threads: glibc's allocator measured 1.3–1.6× slower end to
+/// end on a 47k-chart mesh), the system allocator for blocks of 1 MiB or more, which it
+/// returns to the system as soon as they are freed (see [`alloc`]).
 #[global_allocator]
-static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+static ALLOCATOR: alloc::SplitAllocator = alloc::SplitAllocator;
 
 mod errors;
 mod options;

@@ -54,6 +54,17 @@ pub(super) const PAR_MIN_FACES: usize = 4096;
 /// Triangles per parallel work item.
 pub(super) const PAR_CHUNK: usize = 1024;
 
+/// Run `f(face, item)` over per-face items, in parallel for large charts, and return the
+/// largest value it returns (at least 0; order-independent, so the same in parallel).
+pub(super) fn for_faces_max<T: Send>(items: &mut [T], f: impl Fn(usize, &mut T) -> f64 + Sync + Send) -> f64 {
+    use rayon::prelude::*;
+    if items.len() < PAR_MIN_FACES {
+        items.iter_mut().enumerate().fold(0.0f64, |m, (i, x)| m.max(f(i, x)))
+    } else {
+        items.par_iter_mut().with_min_len(PAR_CHUNK).enumerate().map(|(i, x)| f(i, x)).reduce(|| 0.0f64, f64::max)
+    }
+}
+
 /// Run `f(face, item)` over per-face items, in parallel for large charts.
 pub(super) fn for_faces<T: Send>(items: &mut [T], f: impl Fn(usize, &mut T) + Sync + Send) {
     use rayon::prelude::*;
@@ -81,9 +92,10 @@ pub(super) struct Problem<'a> {
     /// beyond about 400 million triangles are refused ([`Reduced::new`]).
     pub(super) col_ptr: Vec<u32>,
     pub(super) row_idx: Vec<u32>,
-    /// Per triangle, for each pair (i, j ≤ i) of its rows in order, the index of its entry in
-    /// `row_idx`; triangle `f`'s pairs start at `slot_start[f]`.
-    pub(super) slots: Vec<u32>,
+    /// Per triangle, for each pair (i, j ≤ i) of its rows in order, the offset of its entry in
+    /// its column of `row_idx` ([`SLOT_SEARCH`]: look it up, see [`Problem::slot`]); triangle
+    /// `f`'s pairs start at `slot_start[f]`.
+    pub(super) slots: Vec<u8>,
     pub(super) slot_start: Vec<u32>,
     /// Whether any row is an inequality (interior-point iteration).
     pub(super) has_ineq: bool,
@@ -127,6 +139,19 @@ impl<'a> Problem<'a> {
 
     pub(super) fn m(&self) -> usize {
         self.rows.len()
+    }
+
+    /// Index in `row_idx` of the entry (`a`, `b`) (rows of one triangle, either order) whose
+    /// stored slot offset is `offset` ([`Problem::slots`]).
+    #[inline]
+    pub(super) fn slot(&self, a: u32, b: u32, offset: u8) -> usize {
+        let (r, c) = (a.max(b) as usize, a.min(b));
+        let start = self.col_ptr[r] as usize;
+        if offset != SLOT_SEARCH {
+            return start + offset as usize;
+        }
+        let seg = &self.row_idx[start..self.col_ptr[r + 1] as usize];
+        start + seg.binary_search(&c).expect("entry in pattern")
     }
 
     /// Index in `row_idx` of the diagonal entry of row `r` (the last of its column).
@@ -180,8 +205,6 @@ pub(super) struct FaceEval {
     pub(super) c_tri: f64,
     /// log sin α per corner (the wheel rows' residual terms).
     pub(super) log_sin: [f64; 3],
-    /// Largest scaled Lagrangian gradient of the triangle's corners.
-    pub(super) stationarity: f64,
 }
 
 /// Residuals and Newton ingredients at the current state.
@@ -218,7 +241,8 @@ pub(super) fn evaluate_into(p: &Problem<'_>, s: &State, e: &mut Eval) {
     let mut faces = std::mem::take(&mut e.faces);
     faces.clear();
     faces.resize(nf, FaceEval::default());
-    for_faces(&mut faces, |f, fe| {
+    // The largest scaled gradient is reduced in the loop, not stored per triangle.
+    let stationarity = for_faces_max(&mut faces, |f, fe| {
         let a = [s.alpha[3 * f], s.alpha[3 * f + 1], s.alpha[3 * f + 2]];
         let mut sn = [0.0; 3];
         let mut ct = [0.0; 3];
@@ -289,7 +313,7 @@ pub(super) fn evaluate_into(p: &Problem<'_>, s: &State, e: &mut Eval) {
         fe.grad = grad;
         fe.hess = hess;
         fe.c_tri = a[0] + a[1] + a[2] - PI;
-        fe.stationarity = stat;
+        stat
     });
     let mut c_row: Vec<f64> = p.rows.iter().zip(&p.target).map(|(row, t)| if row.wheel { 0.0 } else { -t }).collect();
     for (f, fe) in faces.iter().enumerate() {
@@ -323,7 +347,6 @@ pub(super) fn evaluate_into(p: &Problem<'_>, s: &State, e: &mut Eval) {
         }
     }
     let residual = faces.iter().map(|fe| fe.c_tri).chain(c_row.iter().copied()).fold(0.0f64, |m, x| m.max(x.abs()));
-    let stationarity = faces.iter().fold(0.0f64, |m, fe| m.max(fe.stationarity));
     if !p.has_ineq {
         c_newton = c_row;
     }
@@ -365,6 +388,46 @@ mod tests {
             mu: 0.0,
             z_lo: Vec::new(),
         }
+    }
+
+    /// Every triangle's stored slot offsets locate the entries of its pairs of rows, also
+    /// where a column is too long for a one-byte offset (an interior vertex of valence 200,
+    /// numbered last so that its columns hold the rows of all its neighbours).
+    #[test]
+    fn slots_locate_every_pair_also_in_long_columns() {
+        let k = 200u32;
+        // Ring 1 (interior): 0..k, ring 2 (boundary): k..2k, centre: 2k.
+        let centre = 2 * k;
+        let mut tris = Vec::new();
+        for i in 0..k {
+            let j = (i + 1) % k;
+            tris.push([centre, i, j]);
+            tris.push([i, k + i, k + j]);
+            tris.push([i, k + j, j]);
+        }
+        let n = (2 * k + 1) as usize;
+        let interior: Vec<bool> = (0..n as u32).map(|v| v < k || v == centre).collect();
+        let sum_target: Vec<Option<f64>> = interior.iter().map(|&i| i.then_some(2.0 * PI)).collect();
+        let p = Problem::new(&tris, vec![PI / 3.0; 3 * tris.len()], &interior, &sum_target, &vec![false; n]);
+        let mut searched = 0;
+        for f in 0..tris.len() {
+            let fr = p.face_rows(f);
+            let slots = &p.slots[p.slot_start[f] as usize..p.slot_start[f + 1] as usize];
+            let mut q = 0;
+            for i in 0..fr.len as usize {
+                for j in 0..=i {
+                    let (a, b) = (fr.rows[i].0, fr.rows[j].0);
+                    let slot = p.slot(a, b, slots[q]);
+                    let col = a.max(b) as usize;
+                    assert!((p.col_ptr[col] as usize..p.col_ptr[col + 1] as usize).contains(&slot), "triangle {f} pair ({a}, {b}): slot outside column {col}");
+                    assert_eq!(p.row_idx[slot], a.min(b), "triangle {f} pair ({a}, {b})");
+                    searched += (slots[q] == SLOT_SEARCH) as usize;
+                    q += 1;
+                }
+            }
+            assert_eq!(q, slots.len());
+        }
+        assert!(searched > 0, "no column long enough to need the search");
     }
 
     #[test]

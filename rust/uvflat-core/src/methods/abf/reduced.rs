@@ -12,7 +12,11 @@ use super::*;
 /// once per constraint set, and for every triangle the entries its pairs of rows sum into, so
 /// that every Newton step sums straight into a fixed value array (count, fill, sort and
 /// deduplicate each column, then look every pair up).
-pub(super) fn reduced_pattern(m: usize, nf: usize, face_rows: impl Fn(usize) -> FaceRows) -> (Vec<u32>, Vec<u32>, Vec<u32>, Vec<u32>) {
+///
+/// An entry is stored as its offset in its column, one byte ([`SLOT_SEARCH`] for an offset of
+/// 255 or more, around vertices of valence above ~120, which [`Problem::slot`] finds by binary
+/// search): a quarter of the memory of a 32-bit position (84 MB at 1M triangles).
+pub(super) fn reduced_pattern(m: usize, nf: usize, face_rows: impl Fn(usize) -> FaceRows) -> (Vec<u32>, Vec<u32>, Vec<u8>, Vec<u32>) {
     let mut count = vec![0usize; m + 1];
     for fr in (0..nf).map(&face_rows) {
         for i in 0..fr.len as usize {
@@ -63,13 +67,17 @@ pub(super) fn reduced_pattern(m: usize, nf: usize, face_rows: impl Fn(usize) -> 
                 let (r, c) = (a.max(b) as usize, a.min(b) as usize);
                 let seg = &row_idx[col_ptr[r] as usize..col_ptr[r + 1] as usize];
                 let pos = seg.binary_search(&(c as u32)).expect("entry in pattern");
-                slots.push(col_ptr[r] + pos as u32);
+                slots.push(if pos < SLOT_SEARCH as usize { pos as u8 } else { SLOT_SEARCH });
             }
         }
     }
     slot_start.push(slots.len() as u32);
     (col_ptr, row_idx, slots, slot_start)
 }
+
+/// Offset stored in [`Problem::slots`] for an entry whose offset in its column does not fit
+/// below it: the entry is then found by binary search.
+pub(super) const SLOT_SEARCH: u8 = u8::MAX;
 
 /// Relative margin of the projected-Hessian test in [`evaluate`].
 pub(super) const PROJECTED_HESSIAN_MARGIN: f64 = 0.1;
@@ -85,8 +93,15 @@ pub(super) const MAX_ROWS: usize = 8_000_000;
 pub(super) struct Reduced {
     pub(super) symbolic: faer::sparse::linalg::cholesky::SymbolicCholesky<u32>,
     pub(super) l_values: Vec<f64>,
+    /// Workspace of the solves (small); the factorization's own (about 100 bytes per row on
+    /// large charts) is allocated by [`Reduced::factor`] and freed when it returns, so that it
+    /// is not kept beside the factor through the rest of the step.
     pub(super) mem: faer::dyn_stack::MemBuffer,
 }
+
+/// Sequential: faer's supernodal Cholesky is left-looking and parallel only inside its dense
+/// blocks, which measured slower than sequential at 22k and 363k triangles.
+const PAR: faer::Par = faer::Par::Seq;
 
 impl Reduced {
     pub(super) fn new(p: &Problem<'_>) -> Result<Self, SolveError> {
@@ -100,27 +115,31 @@ impl Reduced {
         let (fwd, inv) = vertex_ordering(p).map_err(|e| other(&e))?;
         let (fwd, inv): (Vec<u32>, Vec<u32>) = (fwd.iter().map(|&x| x as u32).collect(), inv.iter().map(|&x| x as u32).collect());
         let perm = faer::perm::PermRef::new_checked(&fwd, &inv, m);
+        // faer's relaxed supernodes store explicit zeros: 126 factor entries per row on the
+        // 1M-triangle disk, 115 with fundamental supernodes only (`relax: None`, 7 % less peak
+        // memory, same speed), but the other rounding moves the converged UVs by up to 2e-9,
+        // so the default is kept.
         let symbolic = factorize_symbolic_cholesky(a, faer::Side::Upper, SymmetricOrdering::Custom(perm), CholeskySymbolicParams::default())
             .map_err(|e| other(&e))?;
-        // Sequential: faer's supernodal Cholesky is left-looking and parallel only inside its
-        // dense blocks, which measured slower than sequential at 22k and 363k triangles.
-        let par = faer::Par::Seq;
-        let req = symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()).or(symbolic.solve_in_place_scratch::<f64>(1, par));
-        let mem = faer::dyn_stack::MemBuffer::try_new(req).map_err(|e| other(&e))?;
+        let mem = faer::dyn_stack::MemBuffer::try_new(symbolic.solve_in_place_scratch::<f64>(1, PAR)).map_err(|e| other(&e))?;
         let l_values = vec![0.0; symbolic.len_val()];
         Ok(Reduced { symbolic, l_values, mem })
     }
 
     /// Numeric factorization for `values` on the pattern of `p`.
+    ///
+    /// Failures: the matrix is not positive definite, or its workspace cannot be allocated.
     pub(super) fn factor(&mut self, p: &Problem<'_>, values: &[f64]) -> Result<(), SolveError> {
         let m = p.m();
         let a = faer::sparse::SparseColMatRef::new(
             faer::sparse::SymbolicSparseColMatRef::new_checked(m, m, &p.col_ptr, None, &p.row_idx),
             values,
         );
-        let stack = faer::dyn_stack::MemStack::new(&mut self.mem);
+        let req = self.symbolic.factorize_numeric_llt_scratch::<f64>(PAR, Default::default());
+        let mut mem = faer::dyn_stack::MemBuffer::try_new(req).map_err(|e| SolveError::Other(format!("{e:?}")))?;
+        let stack = faer::dyn_stack::MemStack::new(&mut mem);
         self.symbolic
-            .factorize_numeric_llt(&mut self.l_values, a, faer::Side::Upper, Default::default(), faer::Par::Seq, stack, Default::default())
+            .factorize_numeric_llt(&mut self.l_values, a, faer::Side::Upper, Default::default(), PAR, stack, Default::default())
             .map(|_| ())
             .map_err(|_| SolveError::NotPositiveDefinite)
     }
@@ -130,7 +149,7 @@ impl Reduced {
         let m = rhs.len();
         let llt = faer::sparse::linalg::cholesky::LltRef::new(&self.symbolic, &self.l_values);
         let stack = faer::dyn_stack::MemStack::new(&mut self.mem);
-        llt.solve_in_place_with_conj(faer::Conj::No, faer::MatMut::from_column_major_slice_mut(rhs, m, 1), faer::Par::Seq, stack);
+        llt.solve_in_place_with_conj(faer::Conj::No, faer::MatMut::from_column_major_slice_mut(rhs, m, 1), PAR, stack);
         if rhs.iter().all(|x| x.is_finite()) {
             Ok(())
         } else {
