@@ -17,6 +17,9 @@
 
 use rayon::prelude::*;
 
+/// Triangles per rayon task of the energy sums; fewer run sequentially.
+const MIN_LEN: usize = 2048;
+
 use super::jacobian::{Jacobian, TriangleOperators};
 
 #[inline]
@@ -67,18 +70,18 @@ pub fn weighted_sum(
     uv: &[[f64; 2]],
     density: impl Fn(Jacobian) -> f64 + Sync,
 ) -> f64 {
-    triangles
-        .par_iter()
-        .enumerate()
-        .with_min_len(2048)
-        .map(|(f, t)| {
-            let w = weight[f];
-            if w == 0.0 {
-                return 0.0;
-            }
-            w * density(ops.jacobian(f, t, uv))
-        })
-        .sum()
+    let term = |(f, t): (usize, &[u32; 3])| {
+        let w = weight[f];
+        if w == 0.0 {
+            return 0.0;
+        }
+        w * density(ops.jacobian(f, t, uv))
+    };
+    // Below one task's length the same in-order sum, without rayon's overhead.
+    if triangles.len() < MIN_LEN {
+        return triangles.iter().enumerate().map(term).fold(0.0, |s, x| s + x);
+    }
+    triangles.par_iter().enumerate().with_min_len(MIN_LEN).map(term).sum()
 }
 
 /// `Σ A_f · density(J_f)` with the operators' rest areas as weights.
@@ -113,16 +116,18 @@ pub fn arap_energy(ops: &TriangleOperators, triangles: &[[u32; 3]], uv: &[[f64; 
 /// `area_and_jacobian`: the best uniform scale of a map for the symmetric Dirichlet energy.
 /// Not finite for a map with a degenerate triangle.
 pub fn optimal_scale(n: usize, area_and_jacobian: impl Fn(usize) -> (f64, Jacobian) + Sync) -> f64 {
-    let (p, q) = (0..n)
-        .into_par_iter()
-        .with_min_len(2048)
-        .map(|f| {
-            let (a, j) = area_and_jacobian(f);
-            let det = det(j);
-            let fro = frobenius2(j);
-            (a * fro, a * fro / (det * det))
-        })
-        .reduce(|| (0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
+    let term = |f: usize| {
+        let (a, j) = area_and_jacobian(f);
+        let det = det(j);
+        let fro = frobenius2(j);
+        (a * fro, a * fro / (det * det))
+    };
+    let add = |a: (f64, f64), b: (f64, f64)| (a.0 + b.0, a.1 + b.1);
+    let (p, q) = if n < MIN_LEN {
+        (0..n).map(term).fold((0.0, 0.0), add)
+    } else {
+        (0..n).into_par_iter().with_min_len(MIN_LEN).map(term).reduce(|| (0.0, 0.0), add)
+    };
     (q / p).sqrt().sqrt()
 }
 

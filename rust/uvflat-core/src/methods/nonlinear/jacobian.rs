@@ -78,9 +78,7 @@ impl TriangleOperators {
         let edge = |t: &[u32; 3], k: usize| norm(sub(positions[t[(k + 1) % 3] as usize], positions[t[k] as usize]));
         let (sum, count) = triangles.iter().fold((0.0, 0usize), |(s, c), t| (s + edge(t, 0) + edge(t, 1) + edge(t, 2), c + 3));
         let mean_edge = if count > 0 && sum > 0.0 { sum / count as f64 } else { 1.0 };
-        let (grad, area): (Vec<[[f64; 3]; 2]>, Vec<f64>) = triangles
-            .par_iter()
-            .map(|t| {
+        let rest = |t: &[u32; 3]| {
                 let p = [positions[t[0] as usize], positions[t[1] as usize], positions[t[2] as usize]];
                 let a = clamped_angles(p);
                 let longest = edge(t, 0).max(edge(t, 1)).max(edge(t, 2));
@@ -92,8 +90,10 @@ impl TriangleOperators {
                 let det = x1 * y2;
                 let g = [[-1.0 / x1, 1.0 / x1, 0.0], [(x2 - x1) / det, -x2 / det, x1 / det]];
                 (g, 0.5 * det)
-            })
-            .unzip();
+        };
+        // Small charts sequentially: the same values without rayon's overhead.
+        let (grad, area): (Vec<[[f64; 3]; 2]>, Vec<f64>) =
+            if triangles.len() < 1024 { triangles.iter().map(rest).unzip() } else { triangles.par_iter().map(rest).unzip() };
         let total_area = area.iter().sum();
         TriangleOperators { grad, area, total_area }
     }
