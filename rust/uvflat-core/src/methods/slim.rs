@@ -317,7 +317,7 @@ fn solve_timed(chart: &Chart, pins: &[(u32, [f64; 2])], options: &SlimOptions, t
     let (tris, ops) = if chart.quads.is_empty() {
         (&chart.triangles, ops)
     } else {
-        let ops = TriangleOperators::new(&chart.positions, &barrier).weighted(&weights);
+        let ops = ops.extended(&chart.positions, &barrier).weighted(&weights);
         energy = symmetric_dirichlet(&ops, &barrier, &uv);
         (&barrier, ops)
     };

@@ -505,6 +505,37 @@ impl<T: Scalar> FixedValueSolver<T> {
         Ok(())
     }
 
+    /// [`FixedValueSolver::solve`] with the dense Cholesky factor: column by column in one
+    /// scratch vector, no matrix allocated (the few-unknown systems of tiny charts).
+    fn solve_dense_cholesky(&self, fixed_values: &[Vec<T>], b: &[Vec<T>]) -> Result<Vec<Vec<T>>, SolveError> {
+        let nf = self.free.len();
+        let mut y = vec![T::zero_value(); nf];
+        let mut out = Vec::with_capacity(fixed_values.len());
+        for (col, xc) in fixed_values.iter().enumerate() {
+            match b.get(col).filter(|bc| !bc.is_empty()) {
+                Some(bc) => self.free.iter().zip(y.iter_mut()).for_each(|(&g, yi)| *yi = bc[g as usize]),
+                None => y.iter_mut().for_each(|yi| *yi = T::zero_value()),
+            }
+            for &(r, c, v) in &self.coupling {
+                let prod = v * xc[c as usize];
+                y[r as usize] -= prod;
+            }
+            dense_cholesky_solve(&self.ff_values, nf, &mut y);
+            let mut x = vec![T::zero_value(); self.n];
+            for (&v, &g) in y.iter().zip(&self.free) {
+                if !v.finite() {
+                    return Err(SolveError::NonFinite);
+                }
+                x[g as usize] = v;
+            }
+            for (j, &c) in self.fixed.iter().enumerate() {
+                x[c as usize] = xc[j];
+            }
+            out.push(x);
+        }
+        Ok(out)
+    }
+
     /// Number of unknowns.
     pub fn n(&self) -> usize {
         self.n
@@ -522,6 +553,9 @@ impl<T: Scalar> FixedValueSolver<T> {
     /// `fixed_values[k]` (one per fixed unknown) and linear term `b[k]` (length n, or empty
     /// for zero). Returns the full solution vectors (fixed unknowns hold their values).
     pub fn solve(&self, fixed_values: &[Vec<T>], b: &[Vec<T>]) -> Result<Vec<Vec<T>>, SolveError> {
+        if let Some(Factor::DenseLlt) = self.factor {
+            return self.solve_dense_cholesky(fixed_values, b);
+        }
         let k = fixed_values.len();
         let nf = self.free.len();
         let mut rhs = Mat::<T>::from_fn(nf, k, |_, _| T::zero_value());
@@ -551,18 +585,7 @@ impl<T: Scalar> FixedValueSolver<T> {
                 LltRef::new(symbolic, l_values).solve_in_place_with_conj(faer::Conj::No, rhs.as_mut(), par, MemStack::new(&mut mem));
             }
             (Some(Factor::Lu(f)), _) => f.solve_in_place(rhs.as_mut()),
-            (Some(Factor::DenseLlt), _) => {
-                let mut x = vec![T::zero_value(); nf];
-                for col in 0..k {
-                    for i in 0..nf {
-                        x[i] = rhs[(i, col)];
-                    }
-                    dense_cholesky_solve(&self.ff_values, nf, &mut x);
-                    for i in 0..nf {
-                        rhs[(i, col)] = x[i];
-                    }
-                }
-            }
+            (Some(Factor::DenseLlt), _) => unreachable!("solved by solve_dense_cholesky"),
             (Some(Factor::DenseLu(f)), _) => f.solve_in_place(rhs.as_mut()),
             _ => return Err(SolveError::NotPositiveDefinite),
         }
