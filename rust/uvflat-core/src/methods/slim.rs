@@ -169,16 +169,19 @@ fn newton_block(ops: &TriangleOperators, f: usize, t: &[u32; 3], uv: &[[f64; 2]]
         d[3][2 * i + 1] = gr[1][i];
     }
     let l = ops.stiffness(f);
-    for (k, &(p, q)) in local.iter().enumerate() {
-        let mut s = 0.0;
-        for x in 0..4 {
-            if d[x][p] == 0.0 {
-                continue;
-            }
-            for y in 0..4 {
-                s += d[x][p] * h[x][y] * d[y][q];
-            }
+    // Unknown p (component p % 2) moves only the Jacobian entries 2 (p % 2) and 2 (p % 2) + 1.
+    let rows = |p: usize| [2 * (p % 2), 2 * (p % 2) + 1];
+    // hd[x][q] = Σ_y h[x][y] d[y][q].
+    let mut hd = [[0.0; 6]; 4];
+    for x in 0..4 {
+        for q in 0..6 {
+            let [y0, y1] = rows(q);
+            hd[x][q] = h[x][y0] * d[y0][q] + h[x][y1] * d[y1][q];
         }
+    }
+    for (k, &(p, q)) in local.iter().enumerate() {
+        let [x0, x1] = rows(p);
+        let s = d[x0][p] * hd[x0][q] + d[x1][p] * hd[x1][q];
         let reg = if p % 2 == q % 2 { NEWTON_REGULARISATION * l[p / 2][q / 2] } else { 0.0 };
         vals[k] = a * (s + reg);
     }
@@ -188,6 +191,26 @@ fn newton_block(ops: &TriangleOperators, f: usize, t: &[u32; 3], uv: &[[f64; 2]]
         out[i][1] = a * (g[2] * gr[0][i] + g[3] * gr[1][i]);
     }
     out
+}
+
+/// Triangles per rayon task of the per-triangle steps; a chart with fewer triangles runs them
+/// sequentially (no task overhead for the tiny charts met by the thousand).
+const PER_TRIANGLE_MIN_LEN: usize = 1024;
+
+/// `step(values of triangle f, f, triangle f)` for every triangle, writing the triangle's
+/// [`BLOCK`] values, with its results in triangle order: in parallel on large charts,
+/// sequentially on small ones (same results either way).
+fn per_triangle<R: Send>(values: &mut [f64], tris: &[[u32; 3]], step: impl Fn(&mut [f64], usize, &[u32; 3]) -> R + Sync) -> Vec<R> {
+    let k = BLOCK.len();
+    if tris.len() < PER_TRIANGLE_MIN_LEN {
+        return values.chunks_mut(k).zip(tris.iter().enumerate()).map(|(vals, (f, t))| step(vals, f, t)).collect();
+    }
+    values
+        .par_chunks_mut(k)
+        .zip(tris.par_iter().enumerate())
+        .with_min_len(PER_TRIANGLE_MIN_LEN)
+        .map(|(vals, (f, t))| step(vals, f, t))
+        .collect()
 }
 
 /// A valid starting map: UVs, its energy and its name.
@@ -234,7 +257,7 @@ fn pick_start(chart: &Chart, pins: &[(u32, [f64; 2])], ops: &TriangleOperators, 
 
 /// SLIM of one chart (see the module docs).
 pub fn solve(chart: &Chart, pins: &[(u32, [f64; 2])], options: &SlimOptions) -> Result<ChartSolution, ChartFailure> {
-    solve_with_history(chart, pins, options).map(|(s, _)| s)
+    solve_timed(chart, pins, options, false).map(|(s, _)| s)
 }
 
 /// SLIM of one chart, with the energy after every iteration, the accepted steps and the time
@@ -246,11 +269,37 @@ pub fn solve_with_history(
     pins: &[(u32, [f64; 2])],
     options: &SlimOptions,
 ) -> Result<(ChartSolution, SlimHistory), ChartFailure> {
+    solve_timed(chart, pins, options, true)
+}
+
+/// Reads the clock only when the time split is wanted: [`solve`] does not report it, and
+/// reading the clock ten times per iteration is a noticeable share of a tiny chart's solve.
+#[derive(Clone, Copy)]
+struct Clock(bool);
+
+impl Clock {
+    fn now(self) -> Option<Instant> {
+        self.0.then(Instant::now)
+    }
+}
+
+/// Seconds from `a` to `b`, 0 when the clock was not read.
+fn seconds(a: Option<Instant>, b: Option<Instant>) -> f64 {
+    match (a, b) {
+        (Some(a), Some(b)) => (b - a).as_secs_f64(),
+        _ => 0.0,
+    }
+}
+
+/// [`solve_with_history`]; `timed` says whether the history's seconds are measured (they are
+/// 0 otherwise; the energies and steps are the same).
+fn solve_timed(chart: &Chart, pins: &[(u32, [f64; 2])], options: &SlimOptions, timed: bool) -> Result<(ChartSolution, SlimHistory), ChartFailure> {
+    let clock = Clock(timed);
     let n = chart.positions.len();
     let ops = TriangleOperators::new(&chart.positions, &chart.triangles);
-    let t_start = Instant::now();
+    let t_start = clock.now();
     let (start, rejected) = pick_start(chart, pins, &ops, options);
-    let start_seconds = t_start.elapsed().as_secs_f64();
+    let start_seconds = seconds(t_start, clock.now());
     let Some((mut uv, mut energy, start_name)) = start else {
         let mut sol = lscm::solve(chart, pins)?;
         sol.fallback = Some(Fallback {
@@ -268,7 +317,7 @@ pub fn solve_with_history(
     let (tris, ops) = if chart.quads.is_empty() {
         (&chart.triangles, ops)
     } else {
-        let ops = TriangleOperators::new(&chart.positions, &barrier).weighted(&weights);
+        let ops = ops.extended(&chart.positions, &barrier).weighted(&weights);
         energy = symmetric_dirichlet(&ops, &barrier, &uv);
         (&barrier, ops)
     };
@@ -293,15 +342,10 @@ pub fn solve_with_history(
     // the global minimiser: there is nothing to iterate.
     let isometric = it.energy() <= 1.0 + 1e-12;
     while !isometric && it.go_on() {
-        let t0 = Instant::now();
+        let t0 = clock.now();
         if newton {
             // Projected Newton step (module docs): same pattern, same factorization analysis.
-            let grads: Vec<[[f64; 2]; 3]> = values
-                .par_chunks_mut(local.len())
-                .zip(tris.par_iter().enumerate())
-                .with_min_len(1024)
-                .map(|(vals, (f, t))| newton_block(&ops, f, t, &uv, local, vals))
-                .collect();
+            let grads = per_triangle(&mut values, tris, |vals, f, t| newton_block(&ops, f, t, &uv, local, vals));
             let mut b = vec![0.0; 2 * n];
             for (t, g) in tris.iter().zip(&grads) {
                 for i in 0..3 {
@@ -310,17 +354,17 @@ pub fn solve_with_history(
                 }
             }
             drop(grads);
-            let t1 = Instant::now();
+            let t1 = clock.now();
             let s = solver.as_mut().expect("Newton steps follow a SLIM step");
             let factored = s.refactor(&values);
-            let t2 = Instant::now();
+            let t2 = clock.now();
             match factored.and_then(|()| s.solve(&zero_fixed, &[b])) {
                 Ok(x) => {
                     let dir: Vec<[f64; 2]> = (0..n).map(|i| [x[0][2 * i], x[0][2 * i + 1]]).collect();
-                    let t3 = Instant::now();
+                    let t3 = clock.now();
                     let out = flip_free_line_search(tris, &mut uv, &dir, it.energy(), |q| symmetric_dirichlet(&ops, tris, q), &ls);
-                    let t4 = Instant::now();
-                    history.seconds.push([(t1 - t0).as_secs_f64(), (t2 - t1).as_secs_f64(), (t3 - t2).as_secs_f64(), (t4 - t3).as_secs_f64()]);
+                    let t4 = clock.now();
+                    history.seconds.push([seconds(t0, t1), seconds(t1, t2), seconds(t2, t3), seconds(t3, t4)]);
                     newton_steps += 1;
                     if out.step > 0.0 {
                         history.step.push(out.step);
@@ -338,11 +382,7 @@ pub fn solve_with_history(
             newton_failed = true;
             continue;
         }
-        let rhs_parts: Vec<[[f64; 2]; 3]> = values
-            .par_chunks_mut(local.len())
-            .zip(tris.par_iter().enumerate())
-            .with_min_len(1024)
-            .map(|(vals, (f, t))| {
+        let rhs_parts = per_triangle(&mut values, tris, |vals, f, t| {
                 let (m, mr) = reweight(ops.jacobian(f, t, &uv));
                 let l = ops.stiffness(f);
                 let a = ops.area[f];
@@ -358,8 +398,7 @@ pub fn solve_with_history(
                     }
                 }
                 out
-            })
-            .collect();
+            });
         let mut b = vec![0.0; 2 * n];
         for (t, c) in tris.iter().zip(&rhs_parts) {
             for i in 0..3 {
@@ -368,7 +407,7 @@ pub fn solve_with_history(
             }
         }
         drop(rhs_parts);
-        let t1 = Instant::now();
+        let t1 = clock.now();
         let factored = match solver.as_mut() {
             None => {
                 for (p, v) in pattern.iter_mut().zip(&values) {
@@ -386,7 +425,7 @@ pub fn solve_with_history(
             }
             Some(s) => s.refactor(&values),
         };
-        let t2 = Instant::now();
+        let t2 = clock.now();
         // A failed global step (extreme weights) ends the iteration; the current map is valid.
         let x = match factored.and_then(|()| solver.as_ref().expect("factored above").solve(&fixed_vals, &[b])) {
             Ok(x) => x,
@@ -396,15 +435,10 @@ pub fn solve_with_history(
             }
         };
         let dir: Vec<[f64; 2]> = (0..n).map(|i| [x[0][2 * i] - uv[i][0], x[0][2 * i + 1] - uv[i][1]]).collect();
-        let t3 = Instant::now();
+        let t3 = clock.now();
         let out = flip_free_line_search(tris, &mut uv, &dir, it.energy(), |q| symmetric_dirichlet(&ops, tris, q), &ls);
-        let t4 = Instant::now();
-        history.seconds.push([
-            (t1 - t0).as_secs_f64(),
-            (t2 - t1).as_secs_f64(),
-            (t3 - t2).as_secs_f64(),
-            (t4 - t3).as_secs_f64(),
-        ]);
+        let t4 = clock.now();
+        history.seconds.push([seconds(t0, t1), seconds(t1, t2), seconds(t2, t3), seconds(t3, t4)]);
         if out.step == 0.0 {
             it.stalled();
             break;
@@ -426,4 +460,116 @@ pub fn solve_with_history(
     }
     let sol = ChartSolution { uv, iterations, residual: change, note: Some(note), fallback: None };
     Ok((sol, history))
+}
+
+#[cfg(test)]
+mod tests {
+    use proptest::prelude::*;
+
+    use super::*;
+    use crate::charts::build_charts;
+    use crate::mesh::PolyMesh;
+    use crate::solvers::FORCE_SPARSE;
+
+    /// The one chart of the faces `faces` (corner lists) over `positions`.
+    fn chart_of(positions: &[[f64; 3]], faces: &[Vec<u32>]) -> Chart {
+        let corners: Vec<u32> = faces.iter().flatten().copied().collect();
+        let sizes: Vec<u32> = faces.iter().map(|f| f.len() as u32).collect();
+        let mesh = PolyMesh::new(positions, &corners, &sizes).unwrap();
+        let mut charts = build_charts(&mesh, &[], None);
+        assert_eq!(charts.len(), 1);
+        charts.remove(0)
+    }
+
+    /// A tiny chart: `kind` 0 one bent quad, 1 a strip of two bent quads, 2 a 2 × 2 grid of
+    /// quads (one interior vertex), 3 a fan of triangles around a raised interior vertex;
+    /// `z` bends it out of the plane, `xy` jitters its corners.
+    fn tiny_chart(kind: usize, z: &[f64], xy: &[f64]) -> Chart {
+        let jitter = |i: usize| [0.3 * xy[(2 * i) % xy.len()], 0.3 * xy[(2 * i + 1) % xy.len()], z[i % z.len()]];
+        let grid = |w: usize, h: usize| -> (Vec<[f64; 3]>, Vec<Vec<u32>>) {
+            let mut p = Vec::new();
+            for j in 0..=h {
+                for i in 0..=w {
+                    let d = jitter(p.len());
+                    p.push([i as f64 + d[0], j as f64 + d[1], d[2]]);
+                }
+            }
+            let v = |i: usize, j: usize| (j * (w + 1) + i) as u32;
+            let faces = (0..h).flat_map(|j| (0..w).map(move |i| vec![v(i, j), v(i + 1, j), v(i + 1, j + 1), v(i, j + 1)])).collect();
+            (p, faces)
+        };
+        let (p, faces) = match kind {
+            0 => grid(1, 1),
+            1 => grid(2, 1),
+            2 => grid(2, 2),
+            _ => {
+                let k = 5 + xy.len() % 3;
+                let mut p = vec![[0.0, 0.0, 0.4 + z[0].abs()]];
+                for i in 0..k {
+                    let a = (i as f64 + 0.3 * xy[i % xy.len()]) / k as f64 * std::f64::consts::TAU;
+                    p.push([a.cos(), a.sin(), 0.5 * z[(i + 1) % z.len()]]);
+                }
+                let faces = (0..k as u32).map(|i| vec![0, 1 + i, 1 + (i + 1) % k as u32]).collect();
+                (p, faces)
+            }
+        };
+        chart_of(&p, &faces)
+    }
+
+    fn doubled_area(uv: &[[f64; 2]], t: &[u32; 3]) -> f64 {
+        let (p0, p1, p2) = (uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]);
+        (p1[0] - p0[0]) * (p2[1] - p0[1]) - (p1[1] - p0[1]) * (p2[0] - p0[0])
+    }
+
+    /// A bent quad is not developable with its other diagonal: SLIM iterates, and the dense
+    /// path takes the same steps as the general one.
+    #[test]
+    fn a_bent_quad_iterates_the_same_on_both_paths() {
+        let chart = tiny_chart(0, &[0.0, 0.0, 0.0, 0.6], &[0.0]);
+        let (dense, h) = solve_with_history(&chart, &[], &SlimOptions::default()).unwrap();
+        FORCE_SPARSE.with(|f| f.set(true));
+        let (general, hg) = solve_with_history(&chart, &[], &SlimOptions::default()).unwrap();
+        FORCE_SPARSE.with(|f| f.set(false));
+        assert!(dense.iterations > 0 && dense.iterations == general.iterations, "{} vs {}", dense.iterations, general.iterations);
+        assert!(h.energy.last() < h.energy.first(), "{:?}", h.energy);
+        for (e, g) in h.energy.iter().zip(&hg.energy) {
+            assert!((e - g).abs() < 1e-12, "{:?} vs {:?}", h.energy, hg.energy);
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 96, ..ProptestConfig::default() })]
+
+        /// Tiny charts take the dense path (own Cholesky, no pattern analysis, sequential
+        /// per-triangle loops): the same map as the general sparse path to 1e-9, the same
+        /// iterations, every triangle positive, quads convex and the energy never above the
+        /// start's.
+        #[test]
+        fn tiny_charts_solve_like_the_general_path(
+            kind in 0usize..4,
+            z in proptest::collection::vec(-0.8f64..0.8, 3..10),
+            xy in proptest::collection::vec(-0.5f64..0.5, 2..12),
+            step_proxy in any::<bool>(),
+        ) {
+            let chart = tiny_chart(kind, &z, &xy);
+            let options = SlimOptions { step: if step_proxy { SlimStep::Proxy } else { SlimStep::Newton }, ..Default::default() };
+            let (dense, h) = solve_with_history(&chart, &[], &options).unwrap();
+            FORCE_SPARSE.with(|f| f.set(true));
+            let general = solve_with_history(&chart, &[], &options);
+            FORCE_SPARSE.with(|f| f.set(false));
+            let (general, hg) = general.unwrap();
+            prop_assert_eq!(dense.iterations, general.iterations);
+            prop_assert_eq!(h.start, hg.start);
+            for (a, b) in dense.uv.iter().zip(&general.uv) {
+                prop_assert!((a[0] - b[0]).abs() < 1e-9 && (a[1] - b[1]).abs() < 1e-9, "{:?} vs {:?}", a, b);
+            }
+            prop_assert!(dense.fallback.is_none());
+            for t in &chart.triangles {
+                prop_assert!(doubled_area(&dense.uv, t) > 0.0, "flipped {:?}", t);
+            }
+            prop_assert_eq!(crate::methods::nonconvex_quads(&chart, &dense.uv), 0);
+            let (first, last) = (h.energy[0], *h.energy.last().unwrap());
+            prop_assert!(last <= first && last >= 1.0 - 1e-12, "energy {} from {}", last, first);
+        }
+    }
 }

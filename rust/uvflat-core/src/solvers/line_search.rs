@@ -60,6 +60,10 @@ pub fn first_positive_root(a: f64, b: f64, c: f64) -> f64 {
     best
 }
 
+/// Items per rayon task; shorter inputs run sequentially (same results, no task overhead on
+/// the tiny charts met by the thousand).
+const MIN_LEN: usize = 4096;
+
 /// Twice the signed area of UV triangle `t`.
 #[inline]
 fn doubled_area(t: &[u32; 3], uv: &[[f64; 2]]) -> f64 {
@@ -74,10 +78,7 @@ fn doubled_area(t: &[u32; 3], uv: &[[f64; 2]]) -> f64 {
 /// finite. Triangles that are not positively oriented at `t = 0` are skipped: no step can keep
 /// them positive, and the caller's energy (which must be `+∞` on them) decides.
 pub fn max_flip_free_step(triangles: &[[u32; 3]], uv: &[[f64; 2]], dir: &[[f64; 2]]) -> f64 {
-    triangles
-        .par_iter()
-        .with_min_len(4096)
-        .map(|t| {
+    let first_flip = |t: &[u32; 3]| {
             let (p0, p1, p2) = (uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]);
             let (d0, d1, d2) = (dir[t[0] as usize], dir[t[1] as usize], dir[t[2] as usize]);
             let e1 = [p1[0] - p0[0], p1[1] - p0[1]];
@@ -91,13 +92,19 @@ pub fn max_flip_free_step(triangles: &[[u32; 3]], uv: &[[f64; 2]], dir: &[[f64; 
             let b = e1[0] * f2[1] - e1[1] * f2[0] + f1[0] * e2[1] - f1[1] * e2[0];
             let a = f1[0] * f2[1] - f1[1] * f2[0];
             first_positive_root(a, b, c)
-        })
-        .reduce(|| f64::INFINITY, f64::min)
+    };
+    if triangles.len() < MIN_LEN {
+        return triangles.iter().map(first_flip).fold(f64::INFINITY, f64::min);
+    }
+    triangles.par_iter().with_min_len(MIN_LEN).map(first_flip).reduce(|| f64::INFINITY, f64::min)
 }
 
 /// Whether every triangle has strictly positive signed area.
 pub fn all_positive(triangles: &[[u32; 3]], uv: &[[f64; 2]]) -> bool {
-    triangles.par_iter().with_min_len(4096).all(|t| doubled_area(t, uv) > 0.0)
+    if triangles.len() < MIN_LEN {
+        return triangles.iter().all(|t| doubled_area(t, uv) > 0.0);
+    }
+    triangles.par_iter().with_min_len(MIN_LEN).all(|t| doubled_area(t, uv) > 0.0)
 }
 
 /// Options of [`flip_free_line_search`].
@@ -163,9 +170,12 @@ where
     let mut trial = uv.to_vec();
     let mut backtracks = 0;
     while t > 0.0 && t.is_finite() && backtracks <= options.max_backtracks {
-        trial.par_iter_mut().zip(uv.par_iter()).zip(dir.par_iter()).with_min_len(4096).for_each(|((q, p), d)| {
-            *q = [p[0] + t * d[0], p[1] + t * d[1]];
-        });
+        let step = |((q, p), d): ((&mut [f64; 2], &[f64; 2]), &[f64; 2])| *q = [p[0] + t * d[0], p[1] + t * d[1]];
+        if trial.len() < MIN_LEN {
+            trial.iter_mut().zip(uv.iter()).zip(dir.iter()).for_each(step);
+        } else {
+            trial.par_iter_mut().zip(uv.par_iter()).zip(dir.par_iter()).with_min_len(MIN_LEN).for_each(step);
+        }
         if all_positive(triangles, &trial) {
             let e = energy(&trial);
             if e.is_finite() && e < energy0 {

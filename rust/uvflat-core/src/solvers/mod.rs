@@ -6,6 +6,8 @@ pub mod ordering;
 mod quadratic;
 
 pub use quadratic::{FixedValueSolver, Scalar, Symmetry};
+#[cfg(test)]
+pub(crate) use quadratic::FORCE_SPARSE;
 
 /// Why a linear solve failed. Turned into a chart failure reason by the methods.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -46,6 +46,12 @@ pub trait Scalar:
     fn conjugate(self) -> Self;
     /// Neither NaN nor infinite.
     fn finite(self) -> bool;
+    /// Real part.
+    fn real(self) -> f64;
+    /// The scalar with real part `x` (and no imaginary part).
+    fn from_real(x: f64) -> Self;
+    /// Product with a real number.
+    fn scale(self, s: f64) -> Self;
 }
 
 impl Scalar for f64 {
@@ -58,6 +64,15 @@ impl Scalar for f64 {
     fn finite(self) -> bool {
         self.is_finite()
     }
+    fn real(self) -> f64 {
+        self
+    }
+    fn from_real(x: f64) -> Self {
+        x
+    }
+    fn scale(self, s: f64) -> Self {
+        self * s
+    }
 }
 
 impl Scalar for faer::c64 {
@@ -69,6 +84,69 @@ impl Scalar for faer::c64 {
     }
     fn finite(self) -> bool {
         self.re.is_finite() && self.im.is_finite()
+    }
+    fn real(self) -> f64 {
+        self.re
+    }
+    fn from_real(x: f64) -> Self {
+        faer::c64::new(x, 0.0)
+    }
+    fn scale(self, s: f64) -> Self {
+        faer::c64::new(self.re * s, self.im * s)
+    }
+}
+
+/// Number of `Q_FC` entries among `slots` (the coupling's length after every load).
+fn coupling_len(slots: &[Slot]) -> usize {
+    slots.iter().filter(|s| matches!(s, Slot::FreeFixed(..) | Slot::FreeFixedConj(..))).count()
+}
+
+/// In-place Cholesky `A = L Lᴴ` of the Hermitian positive definite `nf × nf` matrix whose
+/// lower triangle is stored column-major in `a` (`a[r + c·nf]`, `r ≥ c`); the strict upper
+/// triangle is not read. Column by column (left-looking), no allocation: the factorization
+/// of the few-unknown systems of tiny charts. Fails with
+/// [`SolveError::NotPositiveDefinite`] when a pivot is not positive (or not finite).
+fn dense_cholesky_in_place<T: Scalar>(a: &mut [T], nf: usize) -> Result<(), SolveError> {
+    for j in 0..nf {
+        let mut d = a[j + j * nf].real();
+        for k in 0..j {
+            let l = a[j + k * nf];
+            d -= (l * l.conjugate()).real();
+        }
+        if !(d > 0.0 && d.is_finite()) {
+            return Err(SolveError::NotPositiveDefinite);
+        }
+        let d = d.sqrt();
+        a[j + j * nf] = T::from_real(d);
+        for i in j + 1..nf {
+            let mut s = a[i + j * nf];
+            for k in 0..j {
+                let p = a[i + k * nf] * a[j + k * nf].conjugate();
+                s -= p;
+            }
+            a[i + j * nf] = s.scale(1.0 / d);
+        }
+    }
+    Ok(())
+}
+
+/// Solve `L Lᴴ x = b` in place in `x` with the factor of [`dense_cholesky_in_place`].
+fn dense_cholesky_solve<T: Scalar>(l: &[T], nf: usize, x: &mut [T]) {
+    for j in 0..nf {
+        let mut s = x[j];
+        for k in 0..j {
+            let p = l[j + k * nf] * x[k];
+            s -= p;
+        }
+        x[j] = s.scale(1.0 / l[j + j * nf].real());
+    }
+    for j in (0..nf).rev() {
+        let mut s = x[j];
+        for i in j + 1..nf {
+            let p = l[i + j * nf].conjugate() * x[i];
+            s -= p;
+        }
+        x[j] = s.scale(1.0 / l[j + j * nf].real());
     }
 }
 
@@ -99,13 +177,30 @@ enum Factor<T> {
     /// The values of the last successful Cholesky factorization are in `Symbolic::Llt`.
     Llt,
     Lu(Box<Lu<usize, T>>),
-    DenseLlt(Box<faer::linalg::solvers::Llt<T>>),
+    /// Dense Cholesky factor, in place of `Q_FF` in `ff_values` ([`dense_cholesky_in_place`]).
+    DenseLlt,
     DenseLu(Box<faer::linalg::solvers::PartialPivLu<T>>),
 }
 
 /// Systems with at most this many free unknowns are factored dense: below this size a dense
 /// factorization costs less than the sparse ordering and symbolic analysis alone.
 pub const DENSE_MAX: usize = 24;
+
+#[cfg(test)]
+thread_local! {
+    /// Tests only: factor every system of this thread sparse, so that a method's results on
+    /// tiny charts can be compared between the dense path and the general one.
+    pub(crate) static FORCE_SPARSE: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// [`DENSE_MAX`], or 0 while a test forces the sparse path.
+fn dense_max() -> usize {
+    #[cfg(test)]
+    if FORCE_SPARSE.with(|f| f.get()) {
+        return 0;
+    }
+    DENSE_MAX
+}
 
 /// Where an input triplet goes.
 #[derive(Clone, Copy)]
@@ -184,7 +279,7 @@ impl<T: Scalar> FixedValueSolver<T> {
     /// refactored many times (nested dissection on large systems); a system factored once
     /// should use [`FixedValueSolver::with_ordering`] with [`OrderingKind::Amd`].
     pub fn new(n: usize, triplets: &[(u32, u32, T)], fixed: &[u32], symmetry: Symmetry) -> Result<Self, SolveError> {
-        Self::new_with_dense_max(n, triplets, fixed, symmetry, DENSE_MAX, OrderingKind::Auto)
+        Self::new_with_dense_max(n, triplets, fixed, symmetry, dense_max(), OrderingKind::Auto)
     }
 
     /// [`FixedValueSolver::new`] with the given fill-reducing ordering of `Q_FF` (used by its
@@ -195,7 +290,7 @@ impl<T: Scalar> FixedValueSolver<T> {
     /// factored once (LSCM, Tutte, harmonic, mean value) AMD is the faster choice at every
     /// size measured.
     pub fn with_ordering(n: usize, triplets: &[(u32, u32, T)], fixed: &[u32], symmetry: Symmetry, ordering: OrderingKind) -> Result<Self, SolveError> {
-        Self::new_with_dense_max(n, triplets, fixed, symmetry, DENSE_MAX, ordering)
+        Self::new_with_dense_max(n, triplets, fixed, symmetry, dense_max(), ordering)
     }
 
     /// [`FixedValueSolver::with_ordering`], factoring dense up to `dense_max` free unknowns.
@@ -222,6 +317,10 @@ impl<T: Scalar> FixedValueSolver<T> {
         for (k, &c) in fixed.iter().enumerate() {
             fixed_pos[c as usize] = k as u32;
         }
+        let nf = free.len();
+        if nf <= dense_max {
+            return Self::new_dense(n, triplets, fixed, symmetry, free, &free_pos, &fixed_pos);
+        }
         let mut pairs = Vec::with_capacity(triplets.len());
         let mut slots = Vec::with_capacity(triplets.len());
         for &(r, c, _) in triplets {
@@ -239,7 +338,6 @@ impl<T: Scalar> FixedValueSolver<T> {
             };
             slots.push(slot);
         }
-        let nf = free.len();
         if pairs.len() >= DUPLICATE as usize {
             return Err(SolveError::Other(format!("{} matrix entries exceed the solver's 2³¹ limit", pairs.len())));
         }
@@ -273,7 +371,6 @@ impl<T: Scalar> FixedValueSolver<T> {
         drop(position);
         let nnz_ff = ff_symbolic.row_idx().len();
         let symbolic = match symmetry {
-            _ if nf <= dense_max => Symbolic::Dense,
             Symmetry::Symmetric => {
                 let other = |e: &dyn std::fmt::Debug| SolveError::Other(format!("{e:?}"));
                 let a = ff_symbolic.as_ref();
@@ -293,6 +390,7 @@ impl<T: Scalar> FixedValueSolver<T> {
                 Symbolic::Lu(SymbolicLu::try_new(ff_symbolic.as_ref()).map_err(|e| SolveError::Other(format!("{e:?}")))?)
             }
         };
+        let coupling = Vec::with_capacity(coupling_len(&slots));
         let mut solver = FixedValueSolver {
             n,
             symmetry,
@@ -301,8 +399,54 @@ impl<T: Scalar> FixedValueSolver<T> {
             slots,
             ff_symbolic,
             ff_values: vec![T::zero_value(); nnz_ff],
-            coupling: Vec::new(),
+            coupling,
             symbolic,
+            factor: None,
+        };
+        solver.load_values(triplets.iter().map(|t| t.2));
+        solver.factor_loaded()?;
+        Ok(solver)
+    }
+
+    /// The dense path of [`FixedValueSolver::new_with_dense_max`]: no compressed pattern and no
+    /// symbolic analysis; every `Q_FF` triplet goes straight to its place `r + c·nf` of the
+    /// column-major dense matrix (lower triangle only when symmetric), so a chart of one or a
+    /// few faces costs a handful of small allocations.
+    fn new_dense(
+        n: usize,
+        triplets: &[(u32, u32, T)],
+        fixed: &[u32],
+        symmetry: Symmetry,
+        free: Vec<u32>,
+        free_pos: &[u32],
+        fixed_pos: &[u32],
+    ) -> Result<Self, SolveError> {
+        let nf = free.len();
+        let slots: Vec<Slot> = triplets
+            .iter()
+            .map(|&(r, c, _)| {
+                let (fr, fc) = (free_pos[r as usize], free_pos[c as usize]);
+                match symmetry {
+                    Symmetry::Symmetric if r < c => Slot::Unused,
+                    Symmetry::Symmetric if fr == u32::MAX && fc != u32::MAX => Slot::FreeFixedConj(fc, fixed_pos[r as usize]),
+                    _ if fr == u32::MAX => Slot::Unused,
+                    _ if fc == u32::MAX => Slot::FreeFixed(fr, fixed_pos[c as usize]),
+                    _ => Slot::FreeFree(fr + fc * nf as u32),
+                }
+            })
+            .collect();
+        let ff_symbolic = SymbolicSparseColMat::try_new_from_indices(0, 0, &[]).map_err(|e| SolveError::Other(format!("{e:?}")))?.0;
+        let coupling = Vec::with_capacity(coupling_len(&slots));
+        let mut solver = FixedValueSolver {
+            n,
+            symmetry,
+            free,
+            fixed: fixed.to_vec(),
+            slots,
+            ff_symbolic,
+            ff_values: vec![T::zero_value(); nf * nf],
+            coupling,
+            symbolic: Symbolic::Dense,
             factor: None,
         };
         solver.load_values(triplets.iter().map(|t| t.2));
@@ -336,10 +480,10 @@ impl<T: Scalar> FixedValueSolver<T> {
 
     /// Numeric factorization of the loaded `Q_FF`.
     fn factor_loaded(&mut self) -> Result<(), SolveError> {
-        let mat = SparseColMatRef::new(self.ff_symbolic.as_ref(), &self.ff_values);
         self.factor = None;
         self.factor = Some(match &mut self.symbolic {
             Symbolic::Llt { symbolic, l_values, mem } => {
+                let mat = SparseColMatRef::new(self.ff_symbolic.as_ref(), &self.ff_values);
                 let par = faer::get_global_parallelism();
                 let mut mem = mem.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
                 symbolic
@@ -347,28 +491,21 @@ impl<T: Scalar> FixedValueSolver<T> {
                     .map_err(|_| SolveError::NotPositiveDefinite)?;
                 Factor::Llt
             }
-            Symbolic::Lu(sym) => Factor::Lu(Box::new(Lu::try_new_with_symbolic(sym.clone(), mat).map_err(|e| match e {
+            Symbolic::Lu(sym) => Factor::Lu(Box::new(Lu::try_new_with_symbolic(sym.clone(), SparseColMatRef::new(self.ff_symbolic.as_ref(), &self.ff_values)).map_err(|e| match e {
                 faer::sparse::linalg::LuError::SymbolicSingular { .. } => SolveError::Singular,
                 other => SolveError::Other(format!("{other:?}")),
             })?)),
             Symbolic::Dense => {
                 let nf = self.free.len();
-                let mut dense = Mat::<T>::from_fn(nf, nf, |_, _| T::zero_value());
-                let (cp, ri) = (self.ff_symbolic.col_ptr(), self.ff_symbolic.row_idx());
-                for c in 0..nf {
-                    for k in cp[c]..cp[c + 1] {
-                        let (r, v) = (ri[k], self.ff_values[k]);
-                        dense[(r, c)] += v;
-                        if self.symmetry == Symmetry::Symmetric && r != c {
-                            dense[(c, r)] += v.conjugate();
-                        }
-                    }
-                }
+                // Column-major values (lower triangle when symmetric; see `new_dense`).
                 match self.symmetry {
                     Symmetry::Symmetric => {
-                        Factor::DenseLlt(Box::new(dense.llt(Side::Lower).map_err(|_| SolveError::NotPositiveDefinite)?))
+                        dense_cholesky_in_place(&mut self.ff_values, nf)?;
+                        Factor::DenseLlt
                     }
                     Symmetry::General => {
+                        let v = &self.ff_values;
+                        let dense = Mat::<T>::from_fn(nf, nf, |r, c| v[r + c * nf]);
                         let lu = dense.partial_piv_lu();
                         let u = lu.U();
                         if (0..nf).any(|i| u[(i, i)] == T::zero_value() || !u[(i, i)].finite()) {
@@ -380,6 +517,37 @@ impl<T: Scalar> FixedValueSolver<T> {
             }
         });
         Ok(())
+    }
+
+    /// [`FixedValueSolver::solve`] with the dense Cholesky factor: column by column in one
+    /// scratch vector, no matrix allocated (the few-unknown systems of tiny charts).
+    fn solve_dense_cholesky(&self, fixed_values: &[Vec<T>], b: &[Vec<T>]) -> Result<Vec<Vec<T>>, SolveError> {
+        let nf = self.free.len();
+        let mut y = vec![T::zero_value(); nf];
+        let mut out = Vec::with_capacity(fixed_values.len());
+        for (col, xc) in fixed_values.iter().enumerate() {
+            match b.get(col).filter(|bc| !bc.is_empty()) {
+                Some(bc) => self.free.iter().zip(y.iter_mut()).for_each(|(&g, yi)| *yi = bc[g as usize]),
+                None => y.iter_mut().for_each(|yi| *yi = T::zero_value()),
+            }
+            for &(r, c, v) in &self.coupling {
+                let prod = v * xc[c as usize];
+                y[r as usize] -= prod;
+            }
+            dense_cholesky_solve(&self.ff_values, nf, &mut y);
+            let mut x = vec![T::zero_value(); self.n];
+            for (&v, &g) in y.iter().zip(&self.free) {
+                if !v.finite() {
+                    return Err(SolveError::NonFinite);
+                }
+                x[g as usize] = v;
+            }
+            for (j, &c) in self.fixed.iter().enumerate() {
+                x[c as usize] = xc[j];
+            }
+            out.push(x);
+        }
+        Ok(out)
     }
 
     /// Number of unknowns.
@@ -399,6 +567,9 @@ impl<T: Scalar> FixedValueSolver<T> {
     /// `fixed_values[k]` (one per fixed unknown) and linear term `b[k]` (length n, or empty
     /// for zero). Returns the full solution vectors (fixed unknowns hold their values).
     pub fn solve(&self, fixed_values: &[Vec<T>], b: &[Vec<T>]) -> Result<Vec<Vec<T>>, SolveError> {
+        if let Some(Factor::DenseLlt) = self.factor {
+            return self.solve_dense_cholesky(fixed_values, b);
+        }
         let k = fixed_values.len();
         let nf = self.free.len();
         let mut rhs = Mat::<T>::from_fn(nf, k, |_, _| T::zero_value());
@@ -428,7 +599,7 @@ impl<T: Scalar> FixedValueSolver<T> {
                 LltRef::new(symbolic, l_values).solve_in_place_with_conj(faer::Conj::No, rhs.as_mut(), par, MemStack::new(&mut mem));
             }
             (Some(Factor::Lu(f)), _) => f.solve_in_place(rhs.as_mut()),
-            (Some(Factor::DenseLlt(f)), _) => f.solve_in_place(rhs.as_mut()),
+            (Some(Factor::DenseLlt), _) => unreachable!("solved by solve_dense_cholesky"),
             (Some(Factor::DenseLu(f)), _) => f.solve_in_place(rhs.as_mut()),
             _ => return Err(SolveError::NotPositiveDefinite),
         }
@@ -513,6 +684,44 @@ mod tests {
         for dense_max in [0, usize::MAX] {
             for sym in [Symmetry::Symmetric, Symmetry::General] {
                 assert!(FixedValueSolver::new_with_dense_max(n + 1, &lap, &[0], sym, dense_max, OrderingKind::Auto).is_err(), "{sym:?} {dense_max}");
+            }
+        }
+    }
+
+    /// The dense Cholesky refuses a symmetric indefinite matrix, like the sparse one, and a
+    /// positive definite one solves to round-off on random small systems (every size up to
+    /// the dense limit, random fixed unknowns).
+    #[test]
+    fn dense_cholesky_solves_random_small_systems_and_refuses_indefinite_ones() {
+        let indefinite = [(0u32, 0u32, 1.0), (1, 1, 1.0), (1, 0, 2.0)];
+        for dense_max in [0, usize::MAX] {
+            let r = FixedValueSolver::new_with_dense_max(2, &indefinite, &[], Symmetry::Symmetric, dense_max, OrderingKind::Auto);
+            assert!(matches!(r, Err(SolveError::NotPositiveDefinite)), "{dense_max}");
+        }
+        let mut seed = 12345u64;
+        let mut rand = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for n in 2..=DENSE_MAX + 2 {
+            // Q = Mᵀ M + I as lower-triangle triplets, duplicates split in two.
+            let m: Vec<f64> = (0..n * n).map(|_| rand() - 0.5).collect();
+            let mut t = Vec::new();
+            for r in 0..n {
+                for c in 0..=r {
+                    let v = (0..n).map(|k| m[k * n + r] * m[k * n + c]).sum::<f64>() + if r == c { 1.0 } else { 0.0 };
+                    t.push((r as u32, c as u32, 0.25 * v));
+                    t.push((r as u32, c as u32, 0.75 * v));
+                }
+            }
+            let fixed: Vec<u32> = (0..n as u32).filter(|_| rand() < 0.2).collect();
+            let fv = vec![fixed.iter().map(|_| rand()).collect::<Vec<f64>>()];
+            let b = vec![(0..n).map(|_| rand()).collect::<Vec<f64>>()];
+            let dense = FixedValueSolver::new_with_dense_max(n, &t, &fixed, Symmetry::Symmetric, usize::MAX, OrderingKind::Auto).unwrap();
+            let sparse = FixedValueSolver::new_with_dense_max(n, &t, &fixed, Symmetry::Symmetric, 0, OrderingKind::Auto).unwrap();
+            let (xd, xs) = (dense.solve(&fv, &b).unwrap(), sparse.solve(&fv, &b).unwrap());
+            for i in 0..n {
+                assert!((xd[0][i] - xs[0][i]).abs() < 1e-11 * (1.0 + xs[0][i].abs()), "n {n}, {i}: {} vs {}", xd[0][i], xs[0][i]);
             }
         }
     }

@@ -64,6 +64,45 @@ fn planar_rest(q: [[f64; 2]; 3]) -> ([[f64; 3]; 2], f64) {
     (g, 0.5 * det.abs())
 }
 
+/// Length of edge k (corner k to corner k + 1) of triangle `t`.
+#[inline]
+fn edge(positions: &[[f64; 3]], t: &[u32; 3], k: usize) -> f64 {
+    norm(sub(positions[t[(k + 1) % 3] as usize], positions[t[k] as usize]))
+}
+
+/// Longest 3D edge of triangle `t`.
+#[inline]
+fn longest_edge(positions: &[[f64; 3]], t: &[u32; 3]) -> f64 {
+    edge(positions, t, 0).max(edge(positions, t, 1)).max(edge(positions, t, 2))
+}
+
+/// Mean 3D edge length of `triangles` (each edge once per triangle), 1 when there is none.
+fn mean_edge(positions: &[[f64; 3]], triangles: &[[u32; 3]]) -> f64 {
+    let (sum, count) = triangles.iter().fold((0.0, 0usize), |(s, c), t| (s + edge(positions, t, 0) + edge(positions, t, 1) + edge(positions, t, 2), c + 3));
+    if count > 0 && sum > 0.0 {
+        sum / count as f64
+    } else {
+        1.0
+    }
+}
+
+/// Gradients and area of [`TriangleOperators::new`]'s rest frame of triangle `t`: the
+/// clamped angles and the longest edge (`mean_edge` when the corners coincide).
+#[inline]
+fn sines_rest(positions: &[[f64; 3]], t: &[u32; 3], mean_edge: f64) -> ([[f64; 3]; 2], f64) {
+    let p = [positions[t[0] as usize], positions[t[1] as usize], positions[t[2] as usize]];
+    let a = clamped_angles(p);
+    let longest = longest_edge(positions, t);
+    let longest = if longest > 0.0 { longest } else { mean_edge };
+    // Side opposite corner k is proportional to sin a_k.
+    let s = longest / a[0].sin().max(a[1].sin()).max(a[2].sin());
+    let (l01, l02) = (s * a[2].sin(), s * a[1].sin());
+    let (x1, x2, y2) = (l01, l02 * a[0].cos(), l02 * a[0].sin());
+    let det = x1 * y2;
+    let g = [[-1.0 / x1, 1.0 / x1, 0.0], [(x2 - x1) / det, -x2 / det, x1 / det]];
+    (g, 0.5 * det)
+}
+
 impl TriangleOperators {
     fn from_parts(parts: Vec<([[f64; 3]; 2], f64)>) -> Self {
         let (grad, area): (Vec<[[f64; 3]; 2]>, Vec<f64>) = parts.into_iter().unzip();
@@ -75,25 +114,33 @@ impl TriangleOperators {
     /// edge (law of sines); `area` is the area of that frame triangle. Never fails: a triangle
     /// whose corners coincide gets an equilateral shape with the chart's mean edge length.
     pub fn new(positions: &[[f64; 3]], triangles: &[[u32; 3]]) -> Self {
-        let edge = |t: &[u32; 3], k: usize| norm(sub(positions[t[(k + 1) % 3] as usize], positions[t[k] as usize]));
-        let (sum, count) = triangles.iter().fold((0.0, 0usize), |(s, c), t| (s + edge(t, 0) + edge(t, 1) + edge(t, 2), c + 3));
-        let mean_edge = if count > 0 && sum > 0.0 { sum / count as f64 } else { 1.0 };
-        let (grad, area): (Vec<[[f64; 3]; 2]>, Vec<f64>) = triangles
-            .par_iter()
-            .map(|t| {
-                let p = [positions[t[0] as usize], positions[t[1] as usize], positions[t[2] as usize]];
-                let a = clamped_angles(p);
-                let longest = edge(t, 0).max(edge(t, 1)).max(edge(t, 2));
-                let longest = if longest > 0.0 { longest } else { mean_edge };
-                // Side opposite corner k is proportional to sin a_k.
-                let s = longest / a[0].sin().max(a[1].sin()).max(a[2].sin());
-                let (l01, l02) = (s * a[2].sin(), s * a[1].sin());
-                let (x1, x2, y2) = (l01, l02 * a[0].cos(), l02 * a[0].sin());
-                let det = x1 * y2;
-                let g = [[-1.0 / x1, 1.0 / x1, 0.0], [(x2 - x1) / det, -x2 / det, x1 / det]];
-                (g, 0.5 * det)
-            })
-            .unzip();
+        let mean_edge = mean_edge(positions, triangles);
+        let rest = |t: &[u32; 3]| sines_rest(positions, t, mean_edge);
+        // Small charts sequentially: the same values without rayon's overhead.
+        let (grad, area): (Vec<[[f64; 3]; 2]>, Vec<f64>) =
+            if triangles.len() < 1024 { triangles.iter().map(rest).unzip() } else { triangles.par_iter().map(rest).unzip() };
+        let total_area = area.iter().sum();
+        TriangleOperators { grad, area, total_area }
+    }
+
+    /// [`TriangleOperators::new`] of `triangles`, whose first `self.len()` are the triangles
+    /// `self` was made from by [`TriangleOperators::new`]: their frames are taken over (unless
+    /// their corners coincide, whose frame depends on the mean edge of all the triangles), only
+    /// the others are computed. The same values as `new(positions, triangles)`, for the few
+    /// triangles a method adds to a chart's (SLIM's other quad diagonals).
+    pub fn extended(&self, positions: &[[f64; 3]], triangles: &[[u32; 3]]) -> Self {
+        let mean_edge = mean_edge(positions, triangles);
+        let mut grad = Vec::with_capacity(triangles.len());
+        let mut area = Vec::with_capacity(triangles.len());
+        for (f, t) in triangles.iter().enumerate() {
+            let (g, a) = if f < self.len() && longest_edge(positions, t) > 0.0 {
+                (self.grad[f], self.area[f])
+            } else {
+                sines_rest(positions, t, mean_edge)
+            };
+            grad.push(g);
+            area.push(a);
+        }
         let total_area = area.iter().sum();
         TriangleOperators { grad, area, total_area }
     }
@@ -232,6 +279,29 @@ impl TriangleOperators {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Extending the operators of some triangles by more gives exactly the operators of all
+    /// of them, a triangle with coincident corners (whose frame uses the mean edge) included.
+    #[test]
+    fn extended_operators_equal_the_operators_of_all_triangles() {
+        let mut seed = 99u64;
+        let mut rand = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut positions: Vec<[f64; 3]> = (0..9).map(|_| [rand(), rand(), rand()]).collect();
+        positions.push(positions[0]);
+        positions.push(positions[0]);
+        let mut tris: Vec<[u32; 3]> = (0..7u32).map(|i| [i, i + 1, i + 2]).collect();
+        tris.insert(2, [0, 9, 10]);
+        for n in [0, 1, 3, tris.len()] {
+            let all = TriangleOperators::new(&positions, &tris);
+            let ext = TriangleOperators::new(&positions, &tris[..n]).extended(&positions, &tris);
+            assert_eq!(all.grad, ext.grad, "{n}");
+            assert_eq!(all.area, ext.area, "{n}");
+            assert_eq!(all.total_area, ext.total_area, "{n}");
+        }
+    }
 
     /// A known affine map A applied to a triangle has Jacobian A in every layout.
     #[test]

@@ -28,6 +28,9 @@ pub fn flip_free_start(chart: &Chart) -> Result<Vec<[f64; 2]>, ChartFailure> {
 /// and the mean value start without a general LU ([`mean_value_start`]).
 pub const SEQUENTIAL_STARTS_FROM: usize = 100_000;
 
+/// Charts of fewer triangles compute their starts one after the other.
+const PARALLEL_STARTS_FROM: usize = 64;
+
 /// The mean value map on a circle honouring `start_pins`: on charts of at least
 /// [`SEQUENTIAL_STARTS_FROM`] triangles by [`mean_value::solve_lean`] (the same map without
 /// the general sparse LU, whose factors would set the method's peak memory), else by the LU
@@ -52,8 +55,10 @@ pub fn candidate_starts(chart: &Chart, start_pins: &[(u32, [f64; 2])], with_lscm
     };
     let mean_value_start = || mean_value_start(chart, start_pins);
     // Side by side on two threads, except on large charts, where the two factorizations
-    // alive at once would set the peak memory (about 1.3 KB per triangle more).
-    let (lscm_start, mean_value_start) = if chart.triangles.len() < SEQUENTIAL_STARTS_FROM {
+    // alive at once would set the peak memory (about 1.3 KB per triangle more), and on tiny
+    // ones, where a task costs more than the solve (the scheduler runs them in batches).
+    let n = chart.triangles.len();
+    let (lscm_start, mean_value_start) = if (PARALLEL_STARTS_FROM..SEQUENTIAL_STARTS_FROM).contains(&n) {
         rayon::join(lscm_start, mean_value_start)
     } else {
         (lscm_start(), mean_value_start())
