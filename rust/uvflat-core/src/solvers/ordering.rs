@@ -559,6 +559,25 @@ mod tests {
         (n, col_ptr, row_idx)
     }
 
+    /// The lower-triangle pattern with every vertex expanded to a 2×2 block over interleaved
+    /// unknowns (u, v of one vertex).
+    fn two_by_two(n: usize, col_ptr: &[usize], row_idx: &[usize]) -> (Vec<usize>, Vec<usize>) {
+        let (mut bp, mut br) = (vec![0usize], Vec::new());
+        for c in 0..n {
+            for bc in 0..2 {
+                for &r in &row_idx[col_ptr[c]..col_ptr[c + 1]] {
+                    for b in 0..2 {
+                        if 2 * r + b >= 2 * c + bc {
+                            br.push(2 * r + b);
+                        }
+                    }
+                }
+                bp.push(br.len());
+            }
+        }
+        (bp, br)
+    }
+
     /// Number of nonzeros of the Cholesky factor of the permuted pattern (symbolic).
     fn nnz_l(n: usize, col_ptr: &[usize], row_idx: &[usize], p: &Permutation) -> usize {
         let a = faer::sparse::SymbolicSparseColMatRef::new_checked(n, n, col_ptr, None, row_idx);
@@ -630,19 +649,7 @@ mod tests {
         // vertex have equal closed neighbourhoods and stay next to each other in the order.
         let k = 60;
         let (n, col_ptr, row_idx) = grid(k);
-        let (mut bp, mut br) = (vec![0usize], Vec::new());
-        for c in 0..n {
-            for bc in 0..2 {
-                for &r in &row_idx[col_ptr[c]..col_ptr[c + 1]] {
-                    for b in 0..2 {
-                        if 2 * r + b >= 2 * c + bc {
-                            br.push(2 * r + b);
-                        }
-                    }
-                }
-                bp.push(br.len());
-            }
-        }
+        let (bp, br) = two_by_two(n, &col_ptr, &row_idx);
         let m = 2 * n;
         let nd = fill_reducing(OrderingKind::NestedDissection, m, &bp, &br).unwrap();
         assert_permutation(&nd, m);
@@ -661,19 +668,7 @@ mod tests {
         // vertex loses one unknown (a pin on u only) or a block its u-v coupling.
         let k = 30;
         let (n, col_ptr, row_idx) = grid(k);
-        let (mut bp, mut br) = (vec![0usize], Vec::new());
-        for c in 0..n {
-            for bc in 0..2 {
-                for &r in &row_idx[col_ptr[c]..col_ptr[c + 1]] {
-                    for b in 0..2 {
-                        if 2 * r + b >= 2 * c + bc {
-                            br.push(2 * r + b);
-                        }
-                    }
-                }
-                bp.push(br.len());
-            }
-        }
+        let (bp, br) = two_by_two(n, &col_ptr, &row_idx);
         let m = 2 * n;
         let (qp, qi) = interleaved_blocks(m, &bp, &br).expect("a 2×2-block pattern");
         // the block graph is the vertex graph (off the diagonal, which AMD ignores)

@@ -390,6 +390,22 @@ impl<T: Scalar> FixedValueSolver<T> {
                 Symbolic::Lu(SymbolicLu::try_new(ff_symbolic.as_ref()).map_err(|e| SolveError::Other(format!("{e:?}")))?)
             }
         };
+        Self::assemble_and_factor(n, triplets, fixed, symmetry, free, slots, ff_symbolic, nnz_ff, symbolic)
+    }
+
+    /// The solver of the given analysis, loaded with the triplets' values and factored.
+    #[allow(clippy::too_many_arguments)]
+    fn assemble_and_factor(
+        n: usize,
+        triplets: &[(u32, u32, T)],
+        fixed: &[u32],
+        symmetry: Symmetry,
+        free: Vec<u32>,
+        slots: Vec<Slot>,
+        ff_symbolic: SymbolicSparseColMat<usize>,
+        n_values: usize,
+        symbolic: Symbolic<T>,
+    ) -> Result<Self, SolveError> {
         let coupling = Vec::with_capacity(coupling_len(&slots));
         let mut solver = FixedValueSolver {
             n,
@@ -398,7 +414,7 @@ impl<T: Scalar> FixedValueSolver<T> {
             fixed: fixed.to_vec(),
             slots,
             ff_symbolic,
-            ff_values: vec![T::zero_value(); nnz_ff],
+            ff_values: vec![T::zero_value(); n_values],
             coupling,
             symbolic,
             factor: None,
@@ -436,22 +452,7 @@ impl<T: Scalar> FixedValueSolver<T> {
             })
             .collect();
         let ff_symbolic = SymbolicSparseColMat::try_new_from_indices(0, 0, &[]).map_err(|e| SolveError::Other(format!("{e:?}")))?.0;
-        let coupling = Vec::with_capacity(coupling_len(&slots));
-        let mut solver = FixedValueSolver {
-            n,
-            symmetry,
-            free,
-            fixed: fixed.to_vec(),
-            slots,
-            ff_symbolic,
-            ff_values: vec![T::zero_value(); nf * nf],
-            coupling,
-            symbolic: Symbolic::Dense,
-            factor: None,
-        };
-        solver.load_values(triplets.iter().map(|t| t.2));
-        solver.factor_loaded()?;
-        Ok(solver)
+        Self::assemble_and_factor(n, triplets, fixed, symmetry, free, slots, ff_symbolic, nf * nf, Symbolic::Dense)
     }
 
     /// Numeric refactorisation for new values on the same triplet pattern (same length and

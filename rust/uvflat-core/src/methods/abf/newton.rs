@@ -415,15 +415,7 @@ mod tests {
     /// bit, through factorizations and chord steps.
     #[test]
     fn lean_steps_equal_the_kept_evaluation_steps() {
-        let n = 6u32;
-        let id = |i: u32, j: u32| i * n + j;
-        let mut tris = Vec::new();
-        for i in 0..n - 1 {
-            for j in 0..n - 1 {
-                tris.push([id(i, j), id(i, j + 1), id(i + 1, j + 1)]);
-                tris.push([id(i, j), id(i + 1, j + 1), id(i + 1, j)]);
-            }
-        }
+        let tris = super::super::problem::grid_triangles(6);
         let (beta, interior) = grid_problem(&tris);
         let nv = interior.len();
         let sum_target: Vec<Option<f64>> = interior.iter().map(|&i| i.then_some(2.0 * PI)).collect();

@@ -353,6 +353,20 @@ pub(super) fn evaluate_into(p: &Problem<'_>, s: &State, e: &mut Eval) {
     *e = Eval { faces, c_newton, diag, residual, stationarity, complementarity };
 }
 
+/// The triangles of an `n × n` grid of vertices, two per cell (for the module tests).
+#[cfg(test)]
+pub(super) fn grid_triangles(n: u32) -> Vec<[u32; 3]> {
+    let id = |i: u32, j: u32| i * n + j;
+    let mut tris = Vec::new();
+    for i in 0..n - 1 {
+        for j in 0..n - 1 {
+            tris.push([id(i, j), id(i, j + 1), id(i + 1, j + 1)]);
+            tris.push([id(i, j), id(i + 1, j + 1), id(i + 1, j)]);
+        }
+    }
+    tris
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -360,14 +374,7 @@ mod tests {
     /// A 5 × 5 grid of vertices, two triangles per cell: 9 interior vertices.
     fn grid() -> (Vec<[u32; 3]>, Vec<bool>) {
         let n = 5u32;
-        let id = |i: u32, j: u32| i * n + j;
-        let mut tris = Vec::new();
-        for i in 0..n - 1 {
-            for j in 0..n - 1 {
-                tris.push([id(i, j), id(i, j + 1), id(i + 1, j + 1)]);
-                tris.push([id(i, j), id(i + 1, j + 1), id(i + 1, j)]);
-            }
-        }
+        let tris = grid_triangles(n);
         let interior = (0..n * n).map(|v| (1..n - 1).contains(&(v / n)) && (1..n - 1).contains(&(v % n))).collect();
         (tris, interior)
     }
