@@ -31,6 +31,7 @@ import numpy as np
 from . import mesh_io
 
 CONFORMAL, AREA, FLIPPED = "uvflat_conformal", "uvflat_area", "uvflat_flipped"
+MEASURE = {"conformal": CONFORMAL, "area": AREA}   # heat-map kind -> its face attribute
 COLOR = {"conformal": "uvflat_conformal_color", "area": "uvflat_area_color"}
 ATTRIBUTES = (CONFORMAL, AREA, FLIPPED, *COLOR.values())
 RED_AT = 2.0  # distortion shown fully red
@@ -137,7 +138,7 @@ def write(mesh, face_sizes, solved, conformal, area, flipped, color_kind=None):
     if color_kind is None:
         drop_colors(mesh)
     else:
-        write_colors(mesh, face_sizes, color_kind, {"conformal": c, "area": a}[color_kind])
+        write_colors(mesh, face_sizes, color_kind, c if color_kind == "conformal" else a)
 
 
 def write_colors(mesh, face_sizes, kind, values=None):
@@ -146,7 +147,7 @@ def write_colors(mesh, face_sizes, kind, values=None):
     the viewport shows), and remove the other kind's colours. The mesh must not be in edit
     mode."""
     if values is None:
-        values = mesh_io.read_attribute(mesh, {"conformal": CONFORMAL, "area": AREA}[kind])
+        values = mesh_io.read_attribute(mesh, MEASURE[kind])
         if values is None or len(values) != len(face_sizes):
             values = np.full(len(face_sizes), np.nan)
     rgba = np.repeat(_linear_heat_colors(values), face_sizes, axis=0)

@@ -648,8 +648,9 @@ def _write_and_pack(context, run: Run) -> Summary:
         try:
             # 3. write (UVs, then the seams automatic seams cut)
             t0, quality = time.perf_counter(), phases.get("quality", 0.0)
+            color_kind = heat_map_kind(context)
             for job in jobs:
-                _write(job, phases, heat_map_kind(context))
+                _write(job, phases, color_kind)
                 if run.mark_seams:
                     summary.seams_added += _mark_new_seams(job)
                 else:

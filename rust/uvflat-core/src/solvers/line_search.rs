@@ -79,19 +79,19 @@ fn doubled_area(t: &[u32; 3], uv: &[[f64; 2]]) -> f64 {
 /// them positive, and the caller's energy (which must be `+∞` on them) decides.
 pub fn max_flip_free_step(triangles: &[[u32; 3]], uv: &[[f64; 2]], dir: &[[f64; 2]]) -> f64 {
     let first_flip = |t: &[u32; 3]| {
-            let (p0, p1, p2) = (uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]);
-            let (d0, d1, d2) = (dir[t[0] as usize], dir[t[1] as usize], dir[t[2] as usize]);
-            let e1 = [p1[0] - p0[0], p1[1] - p0[1]];
-            let e2 = [p2[0] - p0[0], p2[1] - p0[1]];
-            let f1 = [d1[0] - d0[0], d1[1] - d0[1]];
-            let f2 = [d2[0] - d0[0], d2[1] - d0[1]];
-            let c = e1[0] * e2[1] - e1[1] * e2[0];
-            if c <= 0.0 || c.is_nan() {
-                return f64::INFINITY;
-            }
-            let b = e1[0] * f2[1] - e1[1] * f2[0] + f1[0] * e2[1] - f1[1] * e2[0];
-            let a = f1[0] * f2[1] - f1[1] * f2[0];
-            first_positive_root(a, b, c)
+        let (p0, p1, p2) = (uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]);
+        let (d0, d1, d2) = (dir[t[0] as usize], dir[t[1] as usize], dir[t[2] as usize]);
+        let e1 = [p1[0] - p0[0], p1[1] - p0[1]];
+        let e2 = [p2[0] - p0[0], p2[1] - p0[1]];
+        let f1 = [d1[0] - d0[0], d1[1] - d0[1]];
+        let f2 = [d2[0] - d0[0], d2[1] - d0[1]];
+        let c = e1[0] * e2[1] - e1[1] * e2[0];
+        if c <= 0.0 || c.is_nan() {
+            return f64::INFINITY;
+        }
+        let b = e1[0] * f2[1] - e1[1] * f2[0] + f1[0] * e2[1] - f1[1] * e2[0];
+        let a = f1[0] * f2[1] - f1[1] * f2[0];
+        first_positive_root(a, b, c)
     };
     if triangles.len() < MIN_LEN {
         return triangles.iter().map(first_flip).fold(f64::INFINITY, f64::min);

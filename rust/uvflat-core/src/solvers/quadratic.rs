@@ -215,6 +215,21 @@ enum Slot {
     Unused,
 }
 
+/// Where triplet `(r, c)` goes, given each unknown's free position (`u32::MAX` when fixed)
+/// and fixed position; `free_free(free row, free column)` numbers a `Q_FF` entry (its
+/// compressed position later, or its dense index). Symmetric systems use the lower triangle
+/// only; an entry (r, c) also stands for (c, r).
+fn slot_of(symmetry: Symmetry, r: u32, c: u32, free_pos: &[u32], fixed_pos: &[u32], mut free_free: impl FnMut(u32, u32) -> u32) -> Slot {
+    let (fr, fc) = (free_pos[r as usize], free_pos[c as usize]);
+    match symmetry {
+        Symmetry::Symmetric if r < c => Slot::Unused,
+        Symmetry::Symmetric if fr == u32::MAX && fc != u32::MAX => Slot::FreeFixedConj(fc, fixed_pos[r as usize]),
+        _ if fr == u32::MAX => Slot::Unused,
+        _ if fc == u32::MAX => Slot::FreeFixed(fr, fixed_pos[c as usize]),
+        _ => Slot::FreeFree(free_free(fr, fc)),
+    }
+}
+
 /// Top bit of a [`compressed_order`] entry: a duplicate of the previous entry.
 const DUPLICATE: u32 = 1 << 31;
 
@@ -324,19 +339,10 @@ impl<T: Scalar> FixedValueSolver<T> {
         let mut pairs = Vec::with_capacity(triplets.len());
         let mut slots = Vec::with_capacity(triplets.len());
         for &(r, c, _) in triplets {
-            let (fr, fc) = (free_pos[r as usize], free_pos[c as usize]);
-            let slot = match symmetry {
-                // Lower triangle only; an entry (r, c) also stands for (c, r).
-                Symmetry::Symmetric if r < c => Slot::Unused,
-                Symmetry::Symmetric if fr == u32::MAX && fc != u32::MAX => Slot::FreeFixedConj(fc, fixed_pos[r as usize]),
-                _ if fr == u32::MAX => Slot::Unused,
-                _ if fc == u32::MAX => Slot::FreeFixed(fr, fixed_pos[c as usize]),
-                _ => {
-                    pairs.push(Pair { row: fr as usize, col: fc as usize });
-                    Slot::FreeFree((pairs.len() - 1) as u32)
-                }
-            };
-            slots.push(slot);
+            slots.push(slot_of(symmetry, r, c, &free_pos, &fixed_pos, |fr, fc| {
+                pairs.push(Pair { row: fr as usize, col: fc as usize });
+                (pairs.len() - 1) as u32
+            }));
         }
         if pairs.len() >= DUPLICATE as usize {
             return Err(SolveError::Other(format!("{} matrix entries exceed the solver's 2³¹ limit", pairs.len())));
@@ -438,19 +444,8 @@ impl<T: Scalar> FixedValueSolver<T> {
         fixed_pos: &[u32],
     ) -> Result<Self, SolveError> {
         let nf = free.len();
-        let slots: Vec<Slot> = triplets
-            .iter()
-            .map(|&(r, c, _)| {
-                let (fr, fc) = (free_pos[r as usize], free_pos[c as usize]);
-                match symmetry {
-                    Symmetry::Symmetric if r < c => Slot::Unused,
-                    Symmetry::Symmetric if fr == u32::MAX && fc != u32::MAX => Slot::FreeFixedConj(fc, fixed_pos[r as usize]),
-                    _ if fr == u32::MAX => Slot::Unused,
-                    _ if fc == u32::MAX => Slot::FreeFixed(fr, fixed_pos[c as usize]),
-                    _ => Slot::FreeFree(fr + fc * nf as u32),
-                }
-            })
-            .collect();
+        let slots: Vec<Slot> =
+            triplets.iter().map(|&(r, c, _)| slot_of(symmetry, r, c, free_pos, fixed_pos, |fr, fc| fr + fc * nf as u32)).collect();
         let ff_symbolic = SymbolicSparseColMat::try_new_from_indices(0, 0, &[]).map_err(|e| SolveError::Other(format!("{e:?}")))?.0;
         Self::assemble_and_factor(n, triplets, fixed, symmetry, free, slots, ff_symbolic, nf * nf, Symbolic::Dense)
     }

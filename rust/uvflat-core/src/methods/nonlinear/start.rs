@@ -43,17 +43,43 @@ pub fn mean_value_start(chart: &Chart, start_pins: &[(u32, [f64; 2])]) -> Result
     }
 }
 
+/// The LSCM start honouring `start_pins`, or why it could not be computed ("lscm: …").
+fn lscm_candidate(chart: &Chart, start_pins: &[(u32, [f64; 2])]) -> Result<Candidate, String> {
+    let angles = chart_angles(&chart.positions, &chart.triangles);
+    match lscm::solve_with_angles(chart, &angles, start_pins) {
+        Ok((uv, _)) => Ok((uv, "lscm")),
+        Err(e) => Err(format!("lscm: {}", e.0)),
+    }
+}
+
+/// The mean value start honouring `start_pins` ([`mean_value_start`]), or why it could not
+/// be computed ("mean_value: …").
+fn mean_value_candidate(chart: &Chart, start_pins: &[(u32, [f64; 2])]) -> Result<Candidate, String> {
+    match mean_value_start(chart, start_pins) {
+        Ok(s) => Ok((s.uv, "mean_value")),
+        Err(e) => Err(format!("mean_value: {}", e.0)),
+    }
+}
+
+/// The computed candidates of `results` in order, the reasons of the others pushed to
+/// `rejected`.
+fn sorted_out(results: impl IntoIterator<Item = Result<Candidate, String>>, rejected: &mut Vec<String>) -> Vec<Candidate> {
+    let mut candidates = Vec::new();
+    for r in results {
+        match r {
+            Ok(c) => candidates.push(c),
+            Err(why) => rejected.push(why),
+        }
+    }
+    candidates
+}
+
 /// The candidate starting maps, computed side by side (independent solves): LSCM (if
 /// `with_lscm`) and the mean value map on a circle, both honouring `start_pins`. Returns the
 /// maps that could be computed and why the others could not.
 pub fn candidate_starts(chart: &Chart, start_pins: &[(u32, [f64; 2])], with_lscm: bool) -> (Vec<Candidate>, Vec<String>) {
-    let lscm_start = || {
-        with_lscm.then(|| {
-            let angles = chart_angles(&chart.positions, &chart.triangles);
-            lscm::solve_with_angles(chart, &angles, start_pins)
-        })
-    };
-    let mean_value_start = || mean_value_start(chart, start_pins);
+    let lscm_start = || with_lscm.then(|| lscm_candidate(chart, start_pins));
+    let mean_value_start = || mean_value_candidate(chart, start_pins);
     // Side by side on two threads, except on large charts, where the two factorizations
     // alive at once would set the peak memory (about 1.3 KB per triangle more), and on tiny
     // ones, where a task costs more than the solve (the scheduler runs them in batches).
@@ -63,16 +89,8 @@ pub fn candidate_starts(chart: &Chart, start_pins: &[(u32, [f64; 2])], with_lscm
     } else {
         (lscm_start(), mean_value_start())
     };
-    let (mut candidates, mut rejected) = (Vec::new(), Vec::new());
-    match lscm_start {
-        Some(Ok((uv, _))) => candidates.push((uv, "lscm")),
-        Some(Err(e)) => rejected.push(format!("lscm: {}", e.0)),
-        None => {}
-    }
-    match mean_value_start {
-        Ok(s) => candidates.push((s.uv, "mean_value")),
-        Err(e) => rejected.push(format!("mean_value: {}", e.0)),
-    }
+    let mut rejected = Vec::new();
+    let candidates = sorted_out(lscm_start.into_iter().chain([mean_value_start]), &mut rejected);
     (candidates, rejected)
 }
 
@@ -110,28 +128,14 @@ pub fn pick_staged(
         rejected.extend(more);
         return pick(chart, candidates, rejected, prepare, assess);
     }
-    let angles = chart_angles(&chart.positions, &chart.triangles);
-    let lscm_start = match lscm::solve_with_angles(chart, &angles, start_pins) {
-        Ok((uv, _)) => vec![(uv, "lscm")],
-        Err(e) => {
-            rejected.push(format!("lscm: {}", e.0));
-            Vec::new()
-        }
-    };
-    drop(angles);
+    let lscm_start = sorted_out([lscm_candidate(chart, start_pins)], rejected);
     let first = pick(chart, lscm_start, rejected, &mut prepare, &mut assess);
     if let Some((uv, e, _)) = &first {
         if *e <= NEAR_ISOMETRIC && nonconvex_quads(chart, uv) == 0 {
             return first;
         }
     }
-    let mean_value = match mean_value_start(chart, start_pins) {
-        Ok(s) => vec![(s.uv, "mean_value")],
-        Err(e) => {
-            rejected.push(format!("mean_value: {}", e.0));
-            Vec::new()
-        }
-    };
+    let mean_value = sorted_out([mean_value_candidate(chart, start_pins)], rejected);
     let second = pick(chart, mean_value, rejected, &mut prepare, &mut assess);
     match (first, second) {
         (Some(a), Some(b)) => {
