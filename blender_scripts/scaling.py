@@ -131,6 +131,8 @@ def child(method: str, triangles: int, slim_iterations: int) -> None:
         options = {}
         if method == "slim":
             options = {"max_iterations": slim_iterations, "tolerance": 0.0}
+        if method == "abf" and os.environ.get("SCALING_ABF_TOLERANCE"):
+            options = {"tolerance": float(os.environ["SCALING_ABF_TOLERANCE"])}
         start, cpu = time.perf_counter(), time.process_time()
         result = uvflat.unwrap(positions, corner_verts, face_sizes, method=method, **options)
         out["seconds"] = time.perf_counter() - start
@@ -239,11 +241,15 @@ def main(argv=None) -> int:
     ap.add_argument("--sizes", default=DEFAULT_SIZES, help="triangle counts, e.g. 50k,100k,1M")
     ap.add_argument("--repeat", type=int, default=1, help="runs per case (median)")
     ap.add_argument("--slim-iterations", type=int, default=20)
+    ap.add_argument("--abf-tolerance", type=float, default=None,
+                    help="abf's Newton tolerance (default: the method's); 1e-9 makes the smooth disk take a Newton step")
     ap.add_argument("--threads", type=int, default=None, help="RAYON_NUM_THREADS of the children")
     ap.add_argument("--out", type=Path, default=None, help="also write the report here")
     ap.add_argument("--json", type=Path, default=None, help="also write the rows as JSON here")
     ap.add_argument("--child", nargs=2, metavar=("METHOD", "TRIANGLES"), help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
+    if args.abf_tolerance is not None:
+        os.environ["SCALING_ABF_TOLERANCE"] = repr(args.abf_tolerance)
     if args.slim_iterations < 1:
         ap.error("--slim-iterations must be at least 1")
     if args.child:

@@ -32,8 +32,11 @@ pub fn solve(chart: &Chart, pins: &[(u32, [f64; 2])], shape: BoundaryShape) -> R
 }
 
 /// The iteration stops when the residual of the mean value system is below this, relative
-/// to its right-hand side (the coupling to the fixed boundary).
-pub const REFINEMENT_TOLERANCE: f64 = 1e-14;
+/// to its right-hand side (the coupling to the fixed boundary). Residuals stagnate around
+/// 2e-14 from the third GMRES cycle on; 1e-14 made the iteration run two to four more cycles
+/// to its stagnation test (camelhead split to 363k triangles: 9.2 s, now 6.0 s), and the map
+/// stays within 1e-9 of the LU map (tests/lean_starts.rs).
+pub const REFINEMENT_TOLERANCE: f64 = 1e-12;
 /// Most GMRES restarts before [`solve_lean`] falls back to the LU solve.
 pub const MAX_REFINEMENTS: usize = 40;
 /// Krylov vectors per GMRES cycle (memory: this many vectors of the chart's size).

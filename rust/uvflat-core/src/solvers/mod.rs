@@ -4,6 +4,7 @@
 pub mod line_search;
 pub mod ordering;
 mod quadratic;
+pub mod refined_llt;
 
 pub use quadratic::{FixedValueSolver, Scalar, Symmetry};
 #[cfg(test)]

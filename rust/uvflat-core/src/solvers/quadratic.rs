@@ -19,12 +19,13 @@
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, LltRef, SymbolicCholesky, SymmetricOrdering};
+use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, SymbolicCholesky, SymmetricOrdering};
 use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::{Pair, SparseColMatRef, SymbolicSparseColMat};
 use faer::{Mat, Side};
 
 use super::ordering::{fill_reducing, OrderingKind};
+use super::refined_llt::{self, RefinedLlt};
 use super::SolveError;
 
 /// The scalars the solver works in: `f64`, or `c64` for Hermitian problems.
@@ -52,6 +53,17 @@ pub trait Scalar:
     fn from_real(x: f64) -> Self;
     /// Product with a real number.
     fn scale(self, s: f64) -> Self;
+    /// The single-precision scalar of the same kind (`f32`, `c32`), for mixed-precision
+    /// factorizations ([`super::refined_llt`]).
+    type Low: faer::traits::ComplexField + Copy + Send + Sync + 'static;
+    /// Rounded to single precision; `None` when that is not finite.
+    fn to_low(self) -> Option<Self::Low>;
+    /// Back to double precision.
+    fn from_low(low: Self::Low) -> Self;
+    /// Single-precision zero.
+    fn low_zero() -> Self::Low;
+    /// Absolute value (modulus).
+    fn magnitude(self) -> f64;
 }
 
 impl Scalar for f64 {
@@ -73,6 +85,20 @@ impl Scalar for f64 {
     fn scale(self, s: f64) -> Self {
         self * s
     }
+    type Low = f32;
+    fn to_low(self) -> Option<f32> {
+        let low = self as f32;
+        low.is_finite().then_some(low)
+    }
+    fn from_low(low: f32) -> Self {
+        low as f64
+    }
+    fn low_zero() -> f32 {
+        0.0
+    }
+    fn magnitude(self) -> f64 {
+        self.abs()
+    }
 }
 
 impl Scalar for faer::c64 {
@@ -93,6 +119,20 @@ impl Scalar for faer::c64 {
     }
     fn scale(self, s: f64) -> Self {
         faer::c64::new(self.re * s, self.im * s)
+    }
+    type Low = faer::c32;
+    fn to_low(self) -> Option<faer::c32> {
+        let low = faer::c32::new(self.re as f32, self.im as f32);
+        (low.re.is_finite() && low.im.is_finite()).then_some(low)
+    }
+    fn from_low(low: faer::c32) -> Self {
+        faer::c64::new(low.re as f64, low.im as f64)
+    }
+    fn low_zero() -> faer::c32 {
+        faer::c32::new(0.0, 0.0)
+    }
+    fn magnitude(self) -> f64 {
+        self.re.hypot(self.im)
     }
 }
 
@@ -161,16 +201,26 @@ pub enum Symmetry {
     General,
 }
 
-enum Symbolic<T> {
+enum Symbolic<T: Scalar> {
     /// Cholesky with our fill-reducing ordering (see [`super::ordering`]); the factor's values
     /// and the factorization/solve scratch are allocated once and reused by every refactor
     /// (the scratch behind a mutex, so that `solve(&self)` can use it and the solver stays
     /// `Sync`).
-    Llt { symbolic: Box<SymbolicCholesky<usize>>, l_values: Vec<T>, mem: std::sync::Mutex<MemBuffer> },
+    ///
+    /// Systems refactored every iteration ([`OrderingKind::Auto`]) of at least
+    /// [`refined_llt::MIXED_MIN`] free unknowns are factored in single precision and solved
+    /// by iterative refinement to double-precision accuracy ([`refined_llt`]).
+    Llt { symbolic: Box<SymbolicCholesky<usize>>, state: std::sync::Mutex<LltState<T>> },
     Lu(SymbolicLu<usize>),
     /// At most [`DENSE_MAX`] free unknowns: dense factorizations, no symbolic analysis (the
     /// charts of one or a few faces that Smart UV Project makes by the thousand).
     Dense,
+}
+
+/// The numeric factor of a sparse Cholesky solver and its workspace.
+struct LltState<T: Scalar> {
+    factor: RefinedLlt<T>,
+    mem: MemBuffer,
 }
 
 enum Factor<T> {
@@ -385,12 +435,9 @@ impl<T: Scalar> FixedValueSolver<T> {
                 let symbolic = factorize_symbolic_cholesky(a, Side::Lower, SymmetricOrdering::Custom(perm_ref), Default::default())
                     .map_err(|e| other(&e))?;
                 let par = faer::get_global_parallelism();
-                let req = symbolic
-                    .factorize_numeric_llt_scratch::<T>(par, Default::default())
-                    .or(symbolic.solve_in_place_scratch::<T>(2, par));
-                let mem = MemBuffer::try_new(req).map_err(|e| other(&e))?;
-                let l_values = vec![T::zero_value(); symbolic.len_val()];
-                Symbolic::Llt { symbolic: Box::new(symbolic), l_values, mem: std::sync::Mutex::new(mem) }
+                let mem = MemBuffer::try_new(RefinedLlt::<T>::scratch(&symbolic, par, 2)).map_err(|e| other(&e))?;
+                let factor = RefinedLlt::new(ordering == OrderingKind::Auto && refined_llt::single_pays(nf));
+                Symbolic::Llt { symbolic: Box::new(symbolic), state: std::sync::Mutex::new(LltState { factor, mem }) }
             }
             Symmetry::General => {
                 Symbolic::Lu(SymbolicLu::try_new(ff_symbolic.as_ref()).map_err(|e| SolveError::Other(format!("{e:?}")))?)
@@ -478,13 +525,11 @@ impl<T: Scalar> FixedValueSolver<T> {
     fn factor_loaded(&mut self) -> Result<(), SolveError> {
         self.factor = None;
         self.factor = Some(match &mut self.symbolic {
-            Symbolic::Llt { symbolic, l_values, mem } => {
+            Symbolic::Llt { symbolic, state } => {
                 let mat = SparseColMatRef::new(self.ff_symbolic.as_ref(), &self.ff_values);
                 let par = faer::get_global_parallelism();
-                let mut mem = mem.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-                symbolic
-                    .factorize_numeric_llt(l_values, mat, Side::Lower, Default::default(), par, MemStack::new(&mut mem), Default::default())
-                    .map_err(|_| SolveError::NotPositiveDefinite)?;
+                let state = state.get_mut().unwrap_or_else(std::sync::PoisonError::into_inner);
+                state.factor.factor(symbolic, mat, Side::Lower, par, MemStack::new(&mut state.mem))?;
                 Factor::Llt
             }
             Symbolic::Lu(sym) => Factor::Lu(Box::new(Lu::try_new_with_symbolic(sym.clone(), SparseColMatRef::new(self.ff_symbolic.as_ref(), &self.ff_values)).map_err(|e| match e {
@@ -584,15 +629,16 @@ impl<T: Scalar> FixedValueSolver<T> {
             }
         }
         match (&self.factor, &self.symbolic) {
-            (Some(Factor::Llt), Symbolic::Llt { symbolic, l_values, mem }) => {
+            (Some(Factor::Llt), Symbolic::Llt { symbolic, state }) => {
                 let par = faer::get_global_parallelism();
-                let mut mem = mem.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+                let mut state = state.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+                let state = &mut *state;
                 if k > 2 {
                     // More columns than the scratch was sized for (never in practice).
-                    let req = symbolic.solve_in_place_scratch::<T>(k, par);
-                    *mem = MemBuffer::try_new(req).map_err(|e| SolveError::Other(format!("{e:?}")))?;
+                    state.mem = MemBuffer::try_new(RefinedLlt::<T>::scratch(symbolic, par, k)).map_err(|e| SolveError::Other(format!("{e:?}")))?;
                 }
-                LltRef::new(symbolic, l_values).solve_in_place_with_conj(faer::Conj::No, rhs.as_mut(), par, MemStack::new(&mut mem));
+                let mat = SparseColMatRef::new(self.ff_symbolic.as_ref(), &self.ff_values);
+                state.factor.solve_in_place(symbolic, mat, Side::Lower, rhs.as_mut(), par, MemStack::new(&mut state.mem))?;
             }
             (Some(Factor::Lu(f)), _) => f.solve_in_place(rhs.as_mut()),
             (Some(Factor::DenseLlt), _) => unreachable!("solved by solve_dense_cholesky"),

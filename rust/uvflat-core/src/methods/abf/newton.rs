@@ -68,10 +68,12 @@ impl Linear {
 /// it was computed with.
 ///
 /// Memory: the factor is the largest allocation of the solve and stays for chord steps, so
-/// what only one step needs is allocated per step and freed as early as possible: the matrix
-/// values once factored, the factorization's workspace after it ([`Reduced::factor`]); the
+/// what only one step needs is allocated per step and freed as early as possible: the
+/// factorization's workspace after it ([`Reduced::factor`]); the
 /// per-triangle elimination terms are recomputed where used. The Jacobian of the previous
-/// factorization is freed before the next one and stored once the step is taken.
+/// factorization is freed before the next one and stored once the step is taken. The matrix
+/// values stay with the factor: its solves refine a single-precision factor against them
+/// ([`crate::solvers::refined_llt`], half the factor's memory from its size on).
 /// On charts of at least [`LEAN_EVAL_FACES`] triangles the per-triangle evaluation is also
 /// freed while the matrix is factored and recomputed from the state after (bit for bit the
 /// same; one more evaluation per factorization: 3 % more time at 90k triangles, within the
@@ -145,15 +147,13 @@ pub(super) fn step_plus_plus(w: &mut PlusPlus, p: &Problem<'_>, s: &State, e: &m
         if refresh && w.lean {
             // Not needed while the matrix is factored: evaluated again after.
             e.faces = Vec::new();
-            let factored = red.factor(p, &vals);
-            drop(vals);
+            let factored = red.factor(p, vals);
             evaluate_into(p, s, e);
             factored?;
         } else if refresh {
-            red.factor(p, &vals)?;
-            drop(vals);
+            red.factor(p, vals)?;
         }
-        red.solve(&mut rhs)?;
+        red.solve(p, &mut rhs)?;
         rhs
     } else {
         Vec::new()

@@ -7,6 +7,7 @@
 //! reduced matrix, reported by the factorisation.
 
 use super::*;
+use crate::solvers::refined_llt::{self, RefinedLlt};
 
 /// The unique entries (row ≤ column) of `Σ_f (rows of f) × (rows of f)` by columns, built
 /// once per constraint set, and for every triangle the entries its pairs of rows sum into, so
@@ -92,7 +93,12 @@ pub(super) const MAX_ROWS: usize = 8_000_000;
 /// then numeric factorizations straight from the pattern's value array, reusing all buffers.
 pub(super) struct Reduced {
     pub(super) symbolic: faer::sparse::linalg::cholesky::SymbolicCholesky<u32>,
-    pub(super) l_values: Vec<f64>,
+    /// The factor: single precision refined to double from [`refined_llt::MIXED_MIN`] rows
+    /// (half the factor's memory, the largest allocation of the solve), double below.
+    pub(super) factor: RefinedLlt<f64>,
+    /// The values of the factored matrix, kept for the refinement of its solves (chord steps
+    /// included); about a tenth of the factor's size.
+    pub(super) values: Vec<f64>,
     /// Workspace of the solves (small); the factorization's own (about 100 bytes per row on
     /// large charts) is allocated by [`Reduced::factor`] and freed when it returns, so that it
     /// is not kept beside the factor through the rest of the step.
@@ -121,35 +127,30 @@ impl Reduced {
         // so the default is kept.
         let symbolic = factorize_symbolic_cholesky(a, faer::Side::Upper, SymmetricOrdering::Custom(perm), CholeskySymbolicParams::default())
             .map_err(|e| other(&e))?;
-        let mem = faer::dyn_stack::MemBuffer::try_new(symbolic.solve_in_place_scratch::<f64>(1, PAR)).map_err(|e| other(&e))?;
-        let l_values = vec![0.0; symbolic.len_val()];
-        Ok(Reduced { symbolic, l_values, mem })
+        let solve_req = faer::dyn_stack::StackReq::any_of(&[symbolic.solve_in_place_scratch::<f64>(1, PAR), symbolic.solve_in_place_scratch::<f32>(1, PAR)]);
+        let mem = faer::dyn_stack::MemBuffer::try_new(solve_req).map_err(|e| other(&e))?;
+        Ok(Reduced { symbolic, factor: RefinedLlt::new(refined_llt::single_pays(m)), values: Vec::new(), mem })
     }
 
-    /// Numeric factorization for `values` on the pattern of `p`.
+    /// Numeric factorization for `values` on the pattern of `p` (kept for the solves).
     ///
     /// Failures: the matrix is not positive definite, or its workspace cannot be allocated.
-    pub(super) fn factor(&mut self, p: &Problem<'_>, values: &[f64]) -> Result<(), SolveError> {
+    pub(super) fn factor(&mut self, p: &Problem<'_>, values: Vec<f64>) -> Result<(), SolveError> {
         let m = p.m();
-        let a = faer::sparse::SparseColMatRef::new(
-            faer::sparse::SymbolicSparseColMatRef::new_checked(m, m, &p.col_ptr, None, &p.row_idx),
-            values,
-        );
-        let req = self.symbolic.factorize_numeric_llt_scratch::<f64>(PAR, Default::default());
+        self.values = values;
+        let a = faer::sparse::SparseColMatRef::new(faer::sparse::SymbolicSparseColMatRef::new_checked(m, m, &p.col_ptr, None, &p.row_idx), &self.values);
+        let req = RefinedLlt::<f64>::scratch(&self.symbolic, PAR, 0);
         let mut mem = faer::dyn_stack::MemBuffer::try_new(req).map_err(|e| SolveError::Other(format!("{e:?}")))?;
-        let stack = faer::dyn_stack::MemStack::new(&mut mem);
-        self.symbolic
-            .factorize_numeric_llt(&mut self.l_values, a, faer::Side::Upper, Default::default(), PAR, stack, Default::default())
-            .map(|_| ())
-            .map_err(|_| SolveError::NotPositiveDefinite)
+        self.factor.factor(&self.symbolic, a, faer::Side::Upper, PAR, faer::dyn_stack::MemStack::new(&mut mem))
     }
 
     /// Solve with the last factorization, in place.
-    pub(super) fn solve(&mut self, rhs: &mut [f64]) -> Result<(), SolveError> {
+    pub(super) fn solve(&mut self, p: &Problem<'_>, rhs: &mut [f64]) -> Result<(), SolveError> {
         let m = rhs.len();
-        let llt = faer::sparse::linalg::cholesky::LltRef::new(&self.symbolic, &self.l_values);
+        let a = faer::sparse::SparseColMatRef::new(faer::sparse::SymbolicSparseColMatRef::new_checked(m, m, &p.col_ptr, None, &p.row_idx), &self.values);
+        let rhs_mat = faer::MatMut::from_column_major_slice_mut(rhs, m, 1);
         let stack = faer::dyn_stack::MemStack::new(&mut self.mem);
-        llt.solve_in_place_with_conj(faer::Conj::No, faer::MatMut::from_column_major_slice_mut(rhs, m, 1), PAR, stack);
+        self.factor.solve_in_place(&self.symbolic, a, faer::Side::Upper, rhs_mat, PAR, stack)?;
         if rhs.iter().all(|x| x.is_finite()) {
             Ok(())
         } else {

@@ -80,7 +80,7 @@ pub fn weighted_sum(
 const SUM_CHUNK: usize = 2048;
 
 /// `Σ_{f < n} term(f)`, in parallel but with the same rounding on any number of threads:
-/// fixed chunks of [`SUM_CHUNK`] terms summed in order, then their sums in order. (A plain
+/// fixed chunks of `SUM_CHUNK` terms summed in order, then their sums in order. (A plain
 /// parallel sum splits by the threads' work stealing, so a tolerance test on the energy could
 /// stop after a different iteration on one thread than on two.) One chunk or less is summed
 /// right here, without rayon.

@@ -426,7 +426,7 @@ fn run(
             break;
         }
         let t3 = Instant::now();
-        let llt = match factor_regularised(pat, &mut values, &mut b, &uv) {
+        let mut llt = match factor_regularised(pat, &mut values, &mut b, &uv) {
             Ok((f, shift)) => {
                 if shift > 0.0 {
                     shifts += 1;
@@ -441,7 +441,10 @@ fn run(
         };
         let t4 = Instant::now();
         let mut x = faer::Mat::<f64>::from_fn(2 * n, 1, |i, _| b[i]);
-        llt.solve_in_place(x.as_mut());
+        if let Err(e) = llt.solve_in_place(&values, x.as_mut()) {
+            stop_note = Some(format!("scaffold iterations stopped early: the global step could not be solved ({e})"));
+            break;
+        }
         if (0..2 * n).any(|i| !x[(i, 0)].is_finite()) {
             stop_note = Some("scaffold iterations stopped early: the global step is not finite".into());
             break;

@@ -5,25 +5,26 @@
 //! Failures: the factorisation's message when every shift of [`SHIFTS`] fails.
 
 use crate::methods::nonlinear::pattern::BlockPattern;
+use crate::solvers::refined_llt::{self, RefinedLlt};
+use crate::solvers::SolveError;
 
-/// A numeric Cholesky factor of a global step on its pattern's symbolic analysis.
+/// A numeric Cholesky factor of a global step on its pattern's symbolic analysis: single
+/// precision refined to double from [`refined_llt::MIXED_MIN`] unknowns
+/// ([`crate::solvers::refined_llt`]), double below.
 pub(super) struct StepFactor<'p> {
     pattern: &'p BlockPattern,
-    l_values: Vec<f64>,
+    factor: RefinedLlt<f64>,
 }
 
 impl StepFactor<'_> {
-    /// Solve in place with the factor.
-    pub(super) fn solve_in_place(&self, x: faer::MatMut<'_, f64>) {
+    /// Solve in place with the factor of the matrix `values` (those it was factored from).
+    pub(super) fn solve_in_place(&mut self, values: &[f64], x: faer::MatMut<'_, f64>) -> Result<(), SolveError> {
         let par = faer::get_global_parallelism();
-        let symbolic = &self.pattern.symbolic;
-        let mut mem = faer::dyn_stack::MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(x.ncols(), par));
-        faer::sparse::linalg::cholesky::LltRef::new(symbolic, &self.l_values).solve_in_place_with_conj(
-            faer::Conj::No,
-            x,
-            par,
-            faer::dyn_stack::MemStack::new(&mut mem),
-        );
+        let pat = self.pattern;
+        let n2 = pat.col_ptr.len() - 1;
+        let mat = faer::sparse::SparseColMatRef::new(faer::sparse::SymbolicSparseColMatRef::new_checked(n2, n2, &pat.col_ptr, None, &pat.row_idx), values);
+        let mut mem = faer::dyn_stack::MemBuffer::try_new(RefinedLlt::<f64>::scratch(&pat.symbolic, par, x.ncols())).map_err(|e| SolveError::Other(format!("{e:?}")))?;
+        self.factor.solve_in_place(&pat.symbolic, mat, faer::Side::Lower, x, par, faer::dyn_stack::MemStack::new(&mut mem))
     }
 }
 
@@ -63,21 +64,11 @@ pub(super) fn factor_regularised<'p>(
         let sym = faer::sparse::SymbolicSparseColMatRef::new_checked(n2, n2, &pat.col_ptr, None, &pat.row_idx);
         let mat = faer::sparse::SparseColMatRef::new(sym, values);
         let par = faer::get_global_parallelism();
-        let mut l_values = vec![0.0; pat.symbolic.len_val()];
-        let mut mem = faer::dyn_stack::MemBuffer::try_new(pat.symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()))
-            .map_err(|e| format!("{e:?}"))?;
-        let numeric = pat.symbolic.factorize_numeric_llt(
-            &mut l_values,
-            mat,
-            faer::Side::Lower,
-            Default::default(),
-            par,
-            faer::dyn_stack::MemStack::new(&mut mem),
-            Default::default(),
-        );
-        match numeric {
-            Ok(_) => return Ok((StepFactor { pattern: pat, l_values }, shift)),
-            Err(e) => last = format!("{e:?}"),
+        let mut mem = faer::dyn_stack::MemBuffer::try_new(RefinedLlt::<f64>::scratch(&pat.symbolic, par, 1)).map_err(|e| format!("{e:?}"))?;
+        let mut factor = RefinedLlt::new(refined_llt::single_pays(n2));
+        match factor.factor(&pat.symbolic, mat, faer::Side::Lower, par, faer::dyn_stack::MemStack::new(&mut mem)) {
+            Ok(()) => return Ok((StepFactor { pattern: pat, factor }, shift)),
+            Err(e) => last = e.to_string(),
         }
     }
     Err(format!("{last}, even with the diagonal shifted by {:.0e} of its mean", SHIFTS[SHIFTS.len() - 1]))
@@ -108,12 +99,12 @@ mod tests {
         values[pat.slot(0, 0).unwrap()] -= 1e-9;
         let mut b = vec![0.0; 8];
         let before = values.clone();
-        let (f, shift) = factor_regularised(&pat, &mut values, &mut b, &uv).unwrap();
+        let (mut f, shift) = factor_regularised(&pat, &mut values, &mut b, &uv).unwrap();
         assert!(shift > 0.0 && shift <= 1e-6, "shift {shift}");
         // The shift is a proximal term: the step from the current map solves (A + δI) x = δ x_k,
         // and with b = 0 the current map (a translation-free fit) stays close.
         let mut x = faer::Mat::<f64>::from_fn(8, 1, |i, _| b[i]);
-        f.solve_in_place(x.as_mut());
+        f.solve_in_place(&values, x.as_mut()).unwrap();
         assert!((0..8).all(|i| x[(i, 0)].is_finite()));
         let diag_shift = values[pat.slot(3, 3).unwrap()] - before[pat.slot(3, 3).unwrap()];
         assert!(diag_shift > 0.0);
