@@ -25,8 +25,10 @@
 //! factorization that meets a non-positive pivot, and a refinement that stops converging
 //! (a step that does not halve the residual, or more than [`MAX_STEPS`] steps: `A` too
 //! ill-conditioned for single precision) all switch to a double-precision factorization of the
-//! same matrix, kept for later solves until the next factorization. Only a matrix that double
-//! precision cannot factor either fails ([`SolveError::NotPositiveDefinite`]).
+//! same matrix. After such a fallback the factor stays in double precision for every later
+//! factorization (a chart's systems keep their conditioning from one iteration to the next, so
+//! trying single precision again would pay both factorizations each time). Only a matrix that
+//! double precision cannot factor either fails ([`SolveError::NotPositiveDefinite`]).
 //!
 //! Used for systems of at least [`MIXED_MIN`] unknowns that are factored again at every
 //! iteration (SLIM, MIPS, scaffold, ABF++'s reduced system): below that size the refinement's
@@ -108,12 +110,21 @@ impl<T: Scalar> RefinedLlt<T> {
 
     /// Workspace for factorizations in either precision and solves of `cols` right-hand sides.
     pub fn scratch<I: Index>(symbolic: &SymbolicCholesky<I>, par: Par, cols: usize) -> StackReq {
+        StackReq::any_of(&[Self::factor_scratch(symbolic, par), Self::solve_scratch(symbolic, par, cols)])
+    }
+
+    /// Workspace for factorizations in either precision.
+    pub fn factor_scratch<I: Index>(symbolic: &SymbolicCholesky<I>, par: Par) -> StackReq {
         StackReq::any_of(&[
             symbolic.factorize_numeric_llt_scratch::<T>(par, Default::default()),
             symbolic.factorize_numeric_llt_scratch::<T::Low>(par, Default::default()),
-            symbolic.solve_in_place_scratch::<T>(cols, par),
-            symbolic.solve_in_place_scratch::<T::Low>(cols, par),
         ])
+    }
+
+    /// Workspace for solves of `cols` right-hand sides in either precision (a fallback to
+    /// double precision during a solve allocates its factorization workspace itself).
+    pub fn solve_scratch<I: Index>(symbolic: &SymbolicCholesky<I>, par: Par, cols: usize) -> StackReq {
+        StackReq::any_of(&[symbolic.solve_in_place_scratch::<T>(cols, par), symbolic.solve_in_place_scratch::<T::Low>(cols, par)])
     }
 
     /// Numeric factorization of `a` (the triangle `side` of a Hermitian matrix on the
@@ -142,7 +153,9 @@ impl<T: Scalar> RefinedLlt<T> {
         self.factor_double(symbolic, a, side, par, stack)
     }
 
+    /// Double-precision factorization; every later one is double too (module docs).
     fn factor_double<I: Index>(&mut self, symbolic: &SymbolicCholesky<I>, a: SparseColMatRef<'_, I, T>, side: Side, par: Par, stack: &mut MemStack) -> Result<(), SolveError> {
+        self.allow_single = false;
         self.single = Vec::new();
         self.double.resize(symbolic.len_val(), T::zero_value());
         symbolic
@@ -285,8 +298,8 @@ mod tests {
     use faer::sparse::SymbolicSparseColMat;
 
     /// Lower triangle of `scale · (L + shift · I)` for the `w × h` grid graph's Laplacian `L`
-    /// with edge weights in [1, 2), as compressed columns, in the scalar `T` (`skew` adds an
-    /// imaginary part off the diagonal for complex scalars).
+    /// with edge weights in [1, 2), as compressed columns; `entry(value, edge number)` makes
+    /// an off-diagonal entry (with an imaginary part for complex scalars).
     fn grid<T: Scalar>(w: usize, h: usize, shift: f64, scale: f64, entry: impl Fn(f64, usize) -> T) -> (SymbolicSparseColMat<usize>, Vec<T>) {
         let n = w * h;
         let mut cols: Vec<Vec<(usize, T)>> = vec![Vec::new(); n];
@@ -380,6 +393,19 @@ mod tests {
         let (precision, diff, _) = compare(&a, &val, &rhs(a.nrows(), real));
         assert_eq!(precision, Some(Precision::Double));
         assert!(diff < 1e-12, "{diff}");
+        // Once fallen back, the factor does not try single precision again.
+        let sym = factorize_symbolic_cholesky(a.as_ref(), Side::Lower, SymmetricOrdering::Amd, Default::default()).unwrap();
+        let mut mem = MemBuffer::new(RefinedLlt::<f64>::scratch(&sym, Par::Seq, 1));
+        let mat = SparseColMatRef::new(a.as_ref(), &val);
+        let mut f = RefinedLlt::<f64>::new(true);
+        f.factor(&sym, mat, Side::Lower, Par::Seq, MemStack::new(&mut mem)).unwrap();
+        let mut x = rhs(a.nrows(), real);
+        f.solve_in_place(&sym, mat, Side::Lower, MatMut::from_column_major_slice_mut(&mut x, a.nrows(), 1), Par::Seq, MemStack::new(&mut mem)).unwrap();
+        assert_eq!(f.precision(), Some(Precision::Double));
+        let before = SINGLE_FACTORIZATIONS.with(|c| c.get());
+        f.factor(&sym, mat, Side::Lower, Par::Seq, MemStack::new(&mut mem)).unwrap();
+        assert_eq!(f.precision(), Some(Precision::Double));
+        assert_eq!(SINGLE_FACTORIZATIONS.with(|c| c.get()), before, "single precision tried again");
     }
 
     /// The iterative methods give the same maps with their large systems factored in single

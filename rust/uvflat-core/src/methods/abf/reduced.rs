@@ -127,8 +127,7 @@ impl Reduced {
         // so the default is kept.
         let symbolic = factorize_symbolic_cholesky(a, faer::Side::Upper, SymmetricOrdering::Custom(perm), CholeskySymbolicParams::default())
             .map_err(|e| other(&e))?;
-        let solve_req = faer::dyn_stack::StackReq::any_of(&[symbolic.solve_in_place_scratch::<f64>(1, PAR), symbolic.solve_in_place_scratch::<f32>(1, PAR)]);
-        let mem = faer::dyn_stack::MemBuffer::try_new(solve_req).map_err(|e| other(&e))?;
+        let mem = faer::dyn_stack::MemBuffer::try_new(RefinedLlt::<f64>::solve_scratch(&symbolic, PAR, 1)).map_err(|e| other(&e))?;
         Ok(Reduced { symbolic, factor: RefinedLlt::new(refined_llt::single_pays(m)), values: Vec::new(), mem })
     }
 
@@ -139,7 +138,7 @@ impl Reduced {
         let m = p.m();
         self.values = values;
         let a = faer::sparse::SparseColMatRef::new(faer::sparse::SymbolicSparseColMatRef::new_checked(m, m, &p.col_ptr, None, &p.row_idx), &self.values);
-        let req = RefinedLlt::<f64>::scratch(&self.symbolic, PAR, 0);
+        let req = RefinedLlt::<f64>::factor_scratch(&self.symbolic, PAR);
         let mut mem = faer::dyn_stack::MemBuffer::try_new(req).map_err(|e| SolveError::Other(format!("{e:?}")))?;
         self.factor.factor(&self.symbolic, a, faer::Side::Upper, PAR, faer::dyn_stack::MemStack::new(&mut mem))
     }
