@@ -88,6 +88,7 @@ def _tolerance(description: str, default: int, lowest: int = -15, highest: int =
 
 
 _ENERGY_CHANGE = "Stop when the energy decreases by less than this (relative)"
+_ENERGY_CHANGE_PREDICTED = _ENERGY_CHANGE + ", or is predicted to at the next iteration"
 
 OPTIONS: dict[str, OptionInfo] = {
     "boundary": OptionInfo(
@@ -138,7 +139,7 @@ OPTIONS: dict[str, OptionInfo] = {
     "slim_iterations": _iterations(
         "Maximum SLIM iterations (each one a reweighted solve and a flip-free line search)",
         15, 500),
-    "slim_tolerance_exponent": _tolerance(_ENERGY_CHANGE, -4),
+    "slim_tolerance_exponent": _tolerance(_ENERGY_CHANGE_PREDICTED, -4),
     "mips_iterations": _iterations(
         "Maximum Newton iterations (each one a projected-Hessian solve and a flip-free line "
         "search)", 50, 500),

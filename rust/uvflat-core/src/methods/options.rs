@@ -102,7 +102,7 @@ const SCAFFOLD: &[OptionSpec] = &iterative(100, 1e-4);
 const SLIM_ITER: [OptionSpec; 2] = iterative(15, 1e-4);
 const SLIM: &[OptionSpec] = &[
     SLIM_ITER[0],
-    SLIM_ITER[1],
+    OptionSpec { doc: "stop when the energy changes by less than this (relative), or is predicted to at the next iteration", ..SLIM_ITER[1] },
     OptionSpec {
         name: "start",
         kind: OptionKind::Choice(&["auto", "mean_value"]),

@@ -347,6 +347,19 @@ impl<T: Scalar> FixedValueSolver<T> {
         Self::new_with_dense_max(n, triplets, fixed, symmetry, dense_max(), OrderingKind::Auto)
     }
 
+    /// The analysis of [`FixedValueSolver::new`] without a factorization: the triplets give
+    /// only the pattern (their values are ignored), and the first [`FixedValueSolver::refactor`]
+    /// loads values and factors. Lets a method analyse its system while it computes the
+    /// values (e.g. beside a starting map, on another thread). [`FixedValueSolver::solve`]
+    /// before a successful refactor fails as after a failed one
+    /// ([`SolveError::NotPositiveDefinite`]).
+    ///
+    /// Preconditions and failures as [`FixedValueSolver::new`], except that no factorization
+    /// can fail here. Reads this thread's test switches (dense path, precision) when called.
+    pub fn analyse(n: usize, triplets: &[(u32, u32, T)], fixed: &[u32], symmetry: Symmetry) -> Result<Self, SolveError> {
+        Self::analysed(n, triplets, fixed, symmetry, dense_max(), OrderingKind::Auto)
+    }
+
     /// [`FixedValueSolver::new`] with the given fill-reducing ordering of `Q_FF` (used by its
     /// Cholesky factorization; the LU of [`Symmetry::General`] systems orders itself).
     ///
@@ -360,6 +373,22 @@ impl<T: Scalar> FixedValueSolver<T> {
 
     /// [`FixedValueSolver::with_ordering`], factoring dense up to `dense_max` free unknowns.
     fn new_with_dense_max(
+        n: usize,
+        triplets: &[(u32, u32, T)],
+        fixed: &[u32],
+        symmetry: Symmetry,
+        dense_max: usize,
+        ordering: OrderingKind,
+    ) -> Result<Self, SolveError> {
+        let mut solver = Self::analysed(n, triplets, fixed, symmetry, dense_max, ordering)?;
+        solver.load_values(triplets.iter().map(|t| t.2));
+        solver.factor_loaded()?;
+        Ok(solver)
+    }
+
+    /// The analysis of [`FixedValueSolver::new_with_dense_max`]: pattern, ordering and
+    /// symbolic factorization, no values loaded and nothing factored.
+    fn analysed(
         n: usize,
         triplets: &[(u32, u32, T)],
         fixed: &[u32],
@@ -443,14 +472,13 @@ impl<T: Scalar> FixedValueSolver<T> {
                 Symbolic::Lu(SymbolicLu::try_new(ff_symbolic.as_ref()).map_err(|e| SolveError::Other(format!("{e:?}")))?)
             }
         };
-        Self::assemble_and_factor(n, triplets, fixed, symmetry, free, slots, ff_symbolic, nnz_ff, symbolic)
+        Ok(Self::of_analysis(n, fixed, symmetry, free, slots, ff_symbolic, nnz_ff, symbolic))
     }
 
-    /// The solver of the given analysis, loaded with the triplets' values and factored.
+    /// The solver of the given analysis, with no values loaded and nothing factored.
     #[allow(clippy::too_many_arguments)]
-    fn assemble_and_factor(
+    fn of_analysis(
         n: usize,
-        triplets: &[(u32, u32, T)],
         fixed: &[u32],
         symmetry: Symmetry,
         free: Vec<u32>,
@@ -458,9 +486,9 @@ impl<T: Scalar> FixedValueSolver<T> {
         ff_symbolic: SymbolicSparseColMat<usize>,
         n_values: usize,
         symbolic: Symbolic<T>,
-    ) -> Result<Self, SolveError> {
+    ) -> Self {
         let coupling = Vec::with_capacity(coupling_len(&slots));
-        let mut solver = FixedValueSolver {
+        FixedValueSolver {
             n,
             symmetry,
             free,
@@ -471,10 +499,7 @@ impl<T: Scalar> FixedValueSolver<T> {
             coupling,
             symbolic,
             factor: None,
-        };
-        solver.load_values(triplets.iter().map(|t| t.2));
-        solver.factor_loaded()?;
-        Ok(solver)
+        }
     }
 
     /// The dense path of [`FixedValueSolver::new_with_dense_max`]: no compressed pattern and no
@@ -494,7 +519,7 @@ impl<T: Scalar> FixedValueSolver<T> {
         let slots: Vec<Slot> =
             triplets.iter().map(|&(r, c, _)| slot_of(symmetry, r, c, free_pos, fixed_pos, |fr, fc| fr + fc * nf as u32)).collect();
         let ff_symbolic = SymbolicSparseColMat::try_new_from_indices(0, 0, &[]).map_err(|e| SolveError::Other(format!("{e:?}")))?.0;
-        Self::assemble_and_factor(n, triplets, fixed, symmetry, free, slots, ff_symbolic, nf * nf, Symbolic::Dense)
+        Ok(Self::of_analysis(n, fixed, symmetry, free, slots, ff_symbolic, nf * nf, Symbolic::Dense))
     }
 
     /// Numeric refactorisation for new values on the same triplet pattern (same length and
@@ -726,6 +751,38 @@ mod tests {
         for dense_max in [0, usize::MAX] {
             for sym in [Symmetry::Symmetric, Symmetry::General] {
                 assert!(FixedValueSolver::new_with_dense_max(n + 1, &lap, &[0], sym, dense_max, OrderingKind::Auto).is_err(), "{sym:?} {dense_max}");
+            }
+        }
+    }
+
+    /// An analysis without values, then a refactor, solves exactly as the solver built with
+    /// the values (dense and sparse paths, symmetric and general); before that refactor, and
+    /// after one that failed, a solve is refused.
+    #[test]
+    fn analyse_then_refactor_solves_like_new() {
+        let n = 30usize;
+        let mut t: Vec<(u32, u32, f64)> = (0..n as u32).map(|v| (v, v, 0.05 + 0.01 * v as f64)).collect();
+        for v in 0..n as u32 - 1 {
+            let w = 1.0 + 0.1 * (v % 4) as f64;
+            t.extend([(v, v, w), (v + 1, v + 1, w), (v + 1, v, -w), (v, v + 1, -w)]);
+        }
+        let fixed = [3u32, 17];
+        let fv = vec![vec![0.25, -1.5]];
+        let b = vec![(0..n).map(|i| (i as f64 * 0.7).cos()).collect::<Vec<f64>>()];
+        for sym in [Symmetry::Symmetric, Symmetry::General] {
+            for dense_max in [0, usize::MAX] {
+                let made = FixedValueSolver::new_with_dense_max(n, &t, &fixed, sym, dense_max, OrderingKind::Auto).unwrap();
+                let zeros: Vec<(u32, u32, f64)> = t.iter().map(|&(r, c, _)| (r, c, 0.0)).collect();
+                let mut later = FixedValueSolver::analysed(n, &zeros, &fixed, sym, dense_max, OrderingKind::Auto).unwrap();
+                assert!(later.solve(&fv, &b).is_err(), "{sym:?} {dense_max}: solved before any factorization");
+                let values: Vec<f64> = t.iter().map(|e| e.2).collect();
+                later.refactor(&values).unwrap();
+                let (x, y) = (made.solve(&fv, &b).unwrap(), later.solve(&fv, &b).unwrap());
+                assert_eq!(x, y, "{sym:?} {dense_max}");
+                let negated: Vec<f64> = values.iter().map(|v| -v).collect();
+                if sym == Symmetry::Symmetric {
+                    assert!(later.refactor(&negated).is_err() && later.solve(&fv, &b).is_err(), "{dense_max}: negative definite");
+                }
             }
         }
     }

@@ -4,7 +4,8 @@
 //! * [`block_triplets`]: the lower-triangle entries of every triangle's block, as zero-valued
 //!   triplets in [`BLOCK`] order, for [`crate::solvers::FixedValueSolver`] (SLIM, MIPS), which
 //!   analyses the pattern once; a method then writes the 21 values of triangle f at
-//!   `21 f .. 21 f + 21` of its value array and refactors.
+//!   `21 f .. 21 f + 21` of its value array and refactors. [`analysed_beside`] runs that
+//!   analysis beside the computation of the starting map.
 //! * [`BlockPattern`]: the same vertex-graph pattern in compressed columns, plus extra u–u /
 //!   v–v couplings ("chords", the scaffold's edges between chart vertices), the value slot of
 //!   every triangle entry, and its symbolic Cholesky analysis (approximate minimum degree).
@@ -17,6 +18,8 @@
 //! symbolic analysis (out of memory, index overflow).
 
 use rayon::prelude::*;
+
+use crate::solvers::{FixedValueSolver, Symmetry};
 
 /// The `(p, q)`, `p ≥ q`, entries of a triangle's 6 × 6 block, row by row.
 pub const BLOCK: [(usize, usize); 21] = {
@@ -59,6 +62,39 @@ pub fn block_triplets(tris: &[[u32; 3]], unknown: fn(&[u32; 3], usize) -> u32) -
         }
     }
     out
+}
+
+/// Charts with a number of triangles in this range analyse their global step's system
+/// ([`analysed_beside`]) while their starting map is computed: on camelhead (22,704
+/// triangles) the pattern, ordering and symbolic factorization of SLIM's system take
+/// 0.02–0.03 s, a tenth of the whole solve, and the starts leave a thread free for part of
+/// their time. Smaller charts gain nothing worth a task; larger ones compute their starts one
+/// after the other to bound the peak memory ([`super::start::SEQUENTIAL_STARTS_FROM`]), which
+/// an analysis alive through the start would raise.
+pub const ANALYSE_BESIDE_START: std::ops::Range<usize> = 2_000..super::start::SEQUENTIAL_STARTS_FROM;
+
+/// `start()` and, for a chart whose triangle count is in [`ANALYSE_BESIDE_START`], beside it
+/// the analysis ([`FixedValueSolver::analyse`]) of the symmetric 2n-unknown block system over
+/// `tris` with the unknowns `fixed` held, numbered by `unknown`. The analysis runs on the
+/// calling thread, also outside rayon's pool (so that it sees this thread's settings), and
+/// `start` on whichever thread of the pool is free. `None` for other charts, and when the analysis fails (the method then analyses as
+/// usual and meets the failure itself).
+pub fn analysed_beside<S: Send>(
+    n_unknowns: usize,
+    tris: &[[u32; 3]],
+    unknown: fn(&[u32; 3], usize) -> u32,
+    fixed: &[u32],
+    start: impl FnOnce() -> S + Send,
+) -> (S, Option<FixedValueSolver>) {
+    if !ANALYSE_BESIDE_START.contains(&tris.len()) {
+        return (start(), None);
+    }
+    let mut started = None;
+    let analysed = rayon::in_place_scope(|scope| {
+        scope.spawn(|_| started = Some(start()));
+        FixedValueSolver::analyse(n_unknowns, &block_triplets(tris, unknown), fixed, Symmetry::Symmetric).ok()
+    });
+    (started.expect("the scope ran the start"), analysed)
 }
 
 /// Vertex pairs `(a, b)`, `a > b`, of all triangle edges, sorted and unique.

@@ -26,6 +26,16 @@ pub fn anchors(pins: &[(u32, [f64; 2])], uv: &[[f64; 2]]) -> Vec<(u32, [f64; 2])
     }
 }
 
+/// The vertices of [`anchors`], known before any map: all pins when they span more than a
+/// point, else the first pin (or vertex 0 without pins).
+pub fn anchor_vertices(pins: &[(u32, [f64; 2])]) -> Vec<u32> {
+    if pins_span(pins) {
+        pins.iter().map(|p| p.0).collect()
+    } else {
+        vec![pins.first().map_or(0, |p| p.0)]
+    }
+}
+
 /// Translate `uv` so that the first pin's vertex lands on its UV (no-op without pins).
 pub fn translate_onto_first_pin(uv: &mut [[f64; 2]], pins: &[(u32, [f64; 2])]) {
     if let Some(&(v, target)) = pins.first() {

@@ -83,9 +83,13 @@ pub fn candidate_starts(chart: &Chart, start_pins: &[(u32, [f64; 2])], with_lscm
     // Side by side on two threads, except on large charts, where the two factorizations
     // alive at once would set the peak memory (about 1.3 KB per triangle more), and on tiny
     // ones, where a task costs more than the solve (the scheduler runs them in batches).
+    // The mean value map (a general LU, about twice LSCM's time) runs on this thread at once;
+    // LSCM waits to be taken by a free thread, which may first finish other work (the
+    // analysis of [`super::pattern::analysed_beside`]).
     let n = chart.triangles.len();
     let (lscm_start, mean_value_start) = if (PARALLEL_STARTS_FROM..SEQUENTIAL_STARTS_FROM).contains(&n) {
-        rayon::join(lscm_start, mean_value_start)
+        let (m, l) = rayon::join(mean_value_start, lscm_start);
+        (l, m)
     } else {
         (lscm_start(), mean_value_start())
     };
