@@ -40,7 +40,7 @@
 //! Start: a flip-free map. [`SlimStart::Auto`] (default) tries LSCM and the mean value map on
 //! a circle (Floater 2003, flip-free by Tutte's theorem) and keeps whichever has no
 //! non-positive triangle and the lower energy, computing the mean value map only when LSCM is
-//! not already within 5 % of an isometry ([`start::pick_staged`]);
+//! not already within a symmetric Dirichlet energy of 2 ([`start::pick_staged`]);
 //! [`SlimStart::MeanValue`] uses only the latter.
 //! Without pins (or with pins that do not span more than a point) the start is scaled by the
 //! energy-optimal factor `(Σ A ‖J⁻¹‖² / Σ A ‖J‖²)^{1/4}` and translated onto the pin.

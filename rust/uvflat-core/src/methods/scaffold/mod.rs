@@ -54,7 +54,7 @@
 //!
 //! Start: the valid map with the lower energy among LSCM and the mean value map on a circle
 //! (Floater 2003; an embedding by Tutte's theorem), each scaled by the energy-optimal factor,
-//! the latter computed only when LSCM is not within 5 % of an isometry
+//! the latter computed only when LSCM is above a symmetric Dirichlet energy of 2
 //! ([`super::nonlinear::start::pick_staged`]). Valid: every triangle positive, no boundary
 //! self-overlap, and a scaffold can be built.
 //!
@@ -166,7 +166,7 @@ type Start = (Vec<[f64; 2]>, f64, &'static str);
 
 /// The valid start with the lowest energy, each candidate scaled optimally: LSCM and the mean
 /// value map on a circle (Floater 2003, an embedding by Tutte's theorem up to round-off), the
-/// latter only when LSCM is not near an isometry ([`start::pick_staged`]). Valid:
+/// latter only when LSCM is above a symmetric Dirichlet energy of 2 ([`start::pick_staged`]). Valid:
 /// every chart triangle positive, finite energy, no boundary self-overlap, and a scaffold can
 /// be built around it. `None` when no candidate is valid (the reasons are returned).
 fn pick_start(chart: &Chart, ops: &TriangleOperators) -> (Option<Start>, Vec<String>) {
