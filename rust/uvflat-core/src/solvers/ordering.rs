@@ -64,6 +64,11 @@ pub struct Permutation {
     pub fwd: Vec<usize>,
     /// New position of every old index.
     pub inv: Vec<usize>,
+    /// Every node the ordering was computed on stands for two or more unknowns, kept together
+    /// (interleaved 2×2 blocks; ABF++'s two rows per interior vertex), so the factor's
+    /// supernodes are at least two columns wide ([`symbolic_params`] then picks the
+    /// supernodal factorization).
+    pub blocks: bool,
 }
 
 impl Permutation {
@@ -72,8 +77,31 @@ impl Permutation {
         for (new, &old) in fwd.iter().enumerate() {
             inv[old] = new;
         }
-        Permutation { fwd, inv }
+        Permutation { fwd, inv, blocks: false }
     }
+}
+
+/// 2×2-block systems of at least this many unknowns are factored supernodally
+/// ([`symbolic_params`]).
+pub const SUPERNODAL_BLOCKS_FROM: usize = 256;
+
+/// The symbolic Cholesky parameters for a system ordered by `perm`: faer's supernodal
+/// factorization for block systems ([`Permutation::blocks`]: SLIM, MIPS, scaffold, ABF++'s
+/// reduced system) of at least [`SUPERNODAL_BLOCKS_FROM`] unknowns, faer's own choice
+/// otherwise. faer picks by flops per factor entry, which keeps
+/// these systems simplicial up to about 20k unknowns, although every supernode of a block
+/// system is at least two columns wide. Numeric factorization, the block pattern of SLIM with
+/// AMD, simplicial against supernodal: the 128 charts of camelhead cut by Smart UV Project
+/// (the largest 4,708 unknowns) 9.9 against 5.5 ms in all; Suzanne subdivided twice with her
+/// seams, largest chart 10,442 unknowns, 14.2 against 4.4 ms; at 422 unknowns 71 against
+/// 59 µs, from about 100 unknowns down the same. On scalar systems (one unknown per vertex)
+/// faer's choice was within 10 % of the better one.
+pub fn symbolic_params(perm: &Permutation) -> faer::sparse::linalg::cholesky::CholeskySymbolicParams<'static> {
+    let mut params = faer::sparse::linalg::cholesky::CholeskySymbolicParams::default();
+    if perm.blocks && perm.fwd.len() >= SUPERNODAL_BLOCKS_FROM {
+        params.supernodal_flop_ratio_threshold = faer::sparse::linalg::SupernodalThreshold::FORCE_SUPERNODAL;
+    }
+    params
 }
 
 /// Compute a fill-reducing ordering of the `n × n` symmetric pattern given in compressed
@@ -91,7 +119,7 @@ pub fn fill_reducing(kind: OrderingKind, n: usize, col_ptr: &[usize], row_idx: &
             _ => nested_dissection(&Graph::from_pattern(n / 2, &bp, &bi))?,
         };
         let fwd = block.fwd.iter().flat_map(|&k| [2 * k, 2 * k + 1]).collect();
-        return Ok(Permutation::from_fwd(fwd));
+        return Ok(Permutation { blocks: true, ..Permutation::from_fwd(fwd) });
     }
     if kind.resolve(n) == OrderingKind::Amd {
         return amd(n, col_ptr, row_idx);
@@ -116,7 +144,7 @@ fn amd(n: usize, col_ptr: &[usize], row_idx: &[usize]) -> Result<Permutation, Fa
     let mut mem = faer::dyn_stack::MemBuffer::try_new(faer::sparse::linalg::amd::order_maybe_unsorted_scratch::<usize>(n, row_idx.len()))
         .map_err(|_| FaerError::OutOfMemory)?;
     faer::sparse::linalg::amd::order_maybe_unsorted(&mut fwd, &mut inv, a, Default::default(), faer::dyn_stack::MemStack::new(&mut mem))?;
-    Ok(Permutation { fwd, inv })
+    Ok(Permutation { fwd, inv, blocks: false })
 }
 
 /// The pattern of the `n/2 × n/2` block graph when the lower-triangle pattern (`col_ptr`,
@@ -659,6 +687,38 @@ mod tests {
         let amd = fill_reducing(OrderingKind::Amd, m, &bp, &br).unwrap();
         let (f_nd, f_amd) = (nnz_l(m, &bp, &br, &nd), nnz_l(m, &bp, &br, &amd));
         assert!((f_nd as f64) < 1.5 * f_amd as f64, "nd {f_nd} amd {f_amd}");
+    }
+
+    /// Block systems from [`SUPERNODAL_BLOCKS_FROM`] unknowns get the supernodal factorization
+    /// (faer alone keeps this one simplicial), smaller ones and scalar systems faer's choice.
+    #[test]
+    fn block_systems_are_factored_supernodally() {
+        use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, SymbolicCholeskyRaw, SymmetricOrdering};
+        let simplicial_by_faer = |n: usize, col_ptr: &[usize], row_idx: &[usize], p: &Permutation, params| {
+            let a = faer::sparse::SymbolicSparseColMatRef::new_checked(n, n, col_ptr, None, row_idx);
+            let perm = faer::perm::PermRef::new_checked(&p.fwd, &p.inv, n);
+            let sym = factorize_symbolic_cholesky(a, faer::Side::Lower, SymmetricOrdering::Custom(perm), params).unwrap();
+            matches!(sym.raw(), SymbolicCholeskyRaw::Simplicial(_))
+        };
+        for k in [8, 30] {
+            let (n, col_ptr, row_idx) = grid(k);
+            let (bp, br) = two_by_two(n, &col_ptr, &row_idx);
+            let m = 2 * n;
+            let blocks = fill_reducing(OrderingKind::Amd, m, &bp, &br).unwrap();
+            assert!(blocks.blocks, "{k}: 2×2 blocks not recognised");
+            let faer_alone = simplicial_by_faer(m, &bp, &br, &blocks, Default::default());
+            let ours = simplicial_by_faer(m, &bp, &br, &blocks, symbolic_params(&blocks));
+            assert_eq!(ours, m < SUPERNODAL_BLOCKS_FROM, "{k}: {m} unknowns");
+            if m >= SUPERNODAL_BLOCKS_FROM {
+                assert!(faer_alone, "{k}: faer alone already picks supernodal; the test shows nothing");
+            }
+            let scalar = fill_reducing(OrderingKind::Amd, n, &col_ptr, &row_idx).unwrap();
+            assert!(!scalar.blocks);
+            assert_eq!(
+                simplicial_by_faer(n, &col_ptr, &row_idx, &scalar, symbolic_params(&scalar)),
+                simplicial_by_faer(n, &col_ptr, &row_idx, &scalar, Default::default())
+            );
+        }
     }
 
     #[test]

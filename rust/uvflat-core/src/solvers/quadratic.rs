@@ -24,7 +24,7 @@ use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::{Pair, SparseColMatRef, SymbolicSparseColMat};
 use faer::{Mat, Side};
 
-use super::ordering::{fill_reducing, OrderingKind};
+use super::ordering::{fill_reducing, symbolic_params, OrderingKind};
 use super::refined_llt::{self, RefinedLlt};
 use super::SolveError;
 
@@ -461,7 +461,7 @@ impl<T: Scalar> FixedValueSolver<T> {
                 let a = ff_symbolic.as_ref();
                 let perm = fill_reducing(ordering, nf, a.col_ptr(), a.row_idx()).map_err(|e| other(&e))?;
                 let perm_ref = faer::perm::PermRef::new_checked(&perm.fwd, &perm.inv, nf);
-                let symbolic = factorize_symbolic_cholesky(a, Side::Lower, SymmetricOrdering::Custom(perm_ref), Default::default())
+                let symbolic = factorize_symbolic_cholesky(a, Side::Lower, SymmetricOrdering::Custom(perm_ref), symbolic_params(&perm))
                     .map_err(|e| other(&e))?;
                 let par = faer::get_global_parallelism();
                 let mem = MemBuffer::try_new(RefinedLlt::<T>::scratch(&symbolic, par, 2)).map_err(|e| other(&e))?;

@@ -111,21 +111,23 @@ const PAR: faer::Par = faer::Par::Seq;
 
 impl Reduced {
     pub(super) fn new(p: &Problem<'_>) -> Result<Self, SolveError> {
-        use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, CholeskySymbolicParams, SymmetricOrdering};
+        use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, SymmetricOrdering};
         let m = p.m();
         let other = |e: &dyn std::fmt::Debug| SolveError::Other(format!("{e:?}"));
         if m > MAX_ROWS {
             return Err(SolveError::Other(format!("{m} vertex constraint rows exceed the {MAX_ROWS} of the 32-bit reduced system")));
         }
         let a = faer::sparse::SymbolicSparseColMatRef::new_checked(m, m, &p.col_ptr, None, &p.row_idx);
-        let (fwd, inv) = vertex_ordering(p).map_err(|e| other(&e))?;
+        let ordering = vertex_ordering(p).map_err(|e| other(&e))?;
+        let params = crate::solvers::ordering::symbolic_params(&ordering);
+        let (fwd, inv) = (ordering.fwd, ordering.inv);
         let (fwd, inv): (Vec<u32>, Vec<u32>) = (fwd.iter().map(|&x| x as u32).collect(), inv.iter().map(|&x| x as u32).collect());
         let perm = faer::perm::PermRef::new_checked(&fwd, &inv, m);
         // faer's relaxed supernodes store explicit zeros: 126 factor entries per row on the
         // 1M-triangle disk, 115 with fundamental supernodes only (`relax: None`, 7 % less peak
         // memory, same speed), but the other rounding moves the converged UVs by up to 2e-9,
         // so the default is kept.
-        let symbolic = factorize_symbolic_cholesky(a, faer::Side::Upper, SymmetricOrdering::Custom(perm), CholeskySymbolicParams::default())
+        let symbolic = factorize_symbolic_cholesky(a, faer::Side::Upper, SymmetricOrdering::Custom(perm), params)
             .map_err(|e| other(&e))?;
         let mem = faer::dyn_stack::MemBuffer::try_new(RefinedLlt::<f64>::solve_scratch(&symbolic, PAR, 1)).map_err(|e| other(&e))?;
         Ok(Reduced { symbolic, factor: RefinedLlt::new(refined_llt::single_pays(m)), values: Vec::new(), mem })
@@ -161,7 +163,7 @@ impl Reduced {
 /// A fill-reducing ordering of the reduced matrix: approximate minimum degree (nested
 /// dissection for large charts) on the graph of the constrained vertices (half the size of
 /// the matrix), each vertex's rows kept together.
-pub(super) fn vertex_ordering(p: &Problem<'_>) -> Result<(Vec<usize>, Vec<usize>), faer::sparse::FaerError> {
+pub(super) fn vertex_ordering(p: &Problem<'_>) -> Result<crate::solvers::ordering::Permutation, faer::sparse::FaerError> {
     let m = p.m();
     // Group of every row: the rows of one vertex are consecutive.
     let mut group = vec![0usize; m];
@@ -201,5 +203,7 @@ pub(super) fn vertex_ordering(p: &Problem<'_>) -> Result<(Vec<usize>, Vec<usize>
     for (i, &r) in fwd.iter().enumerate() {
         inv[r] = i;
     }
-    Ok((fwd, inv))
+    // Interior vertices have two rows each (angle sum and wheel): the factor's supernodes are
+    // then at least two columns wide, as in the 2×2-block systems.
+    Ok(crate::solvers::ordering::Permutation { fwd, inv, blocks: 2 * g >= m })
 }

@@ -184,7 +184,7 @@ impl BlockPattern {
             sym,
             faer::Side::Lower,
             faer::sparse::linalg::cholesky::SymmetricOrdering::Custom(perm_ref),
-            Default::default(),
+            crate::solvers::ordering::symbolic_params(&perm),
         )
         .map_err(|e| format!("symbolic analysis failed: {e:?}"))?;
         let mut pattern = BlockPattern { col_ptr, row_idx, chart_slots: Vec::new(), symbolic };
