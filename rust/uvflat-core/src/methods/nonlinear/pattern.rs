@@ -77,8 +77,8 @@ pub const ANALYSE_BESIDE_START: std::ops::Range<usize> = 2_000..super::start::SE
 /// the analysis ([`FixedValueSolver::analyse`]) of the symmetric 2n-unknown block system over
 /// `tris` with the unknowns `fixed` held, numbered by `unknown`. The analysis runs on the
 /// calling thread, also outside rayon's pool (so that it sees this thread's settings), and
-/// `start` on whichever thread of the pool is free. `None` for other charts, and when the analysis fails (the method then analyses as
-/// usual and meets the failure itself).
+/// `start` on whichever thread of the pool is free. `None` for other charts, and when the
+/// analysis fails (the method then analyses as usual and meets the failure itself).
 pub fn analysed_beside<S: Send>(
     n_unknowns: usize,
     tris: &[[u32; 3]],

@@ -19,10 +19,8 @@ use crate::methods::lscm::pins_span;
 pub fn anchors(pins: &[(u32, [f64; 2])], uv: &[[f64; 2]]) -> Vec<(u32, [f64; 2])> {
     if pins_span(pins) {
         pins.to_vec()
-    } else if let Some(&(v, _)) = pins.first() {
-        vec![(v, uv[v as usize])]
     } else {
-        vec![(0, uv[0])]
+        anchor_vertices(pins).into_iter().map(|v| (v, uv[v as usize])).collect()
     }
 }
 
