@@ -54,6 +54,19 @@ pub struct Chart {
     pub kind: ChartKind,
     /// Why the chart cannot be mapped at all (non-orientable, non-manifold vertex), if so.
     pub defect: Option<String>,
+    /// [`Chart::vertex_order`], computed at its first use.
+    vertex_order: VertexOrder,
+}
+
+/// The cache of [`Chart::vertex_order`]. A clone starts empty: a cloned chart's triangles
+/// may be changed (holes filled, a unit frame), and its order would then be computed anew.
+#[derive(Debug, Default)]
+struct VertexOrder(std::sync::OnceLock<Vec<u32>>);
+
+impl Clone for VertexOrder {
+    fn clone(&self) -> Self {
+        VertexOrder::default()
+    }
 }
 
 /// A quad face of a chart: its chart vertices in face order and its two triangles.
@@ -96,6 +109,42 @@ impl Quad {
 }
 
 impl Chart {
+    /// An elimination order of the chart's vertices (AMD of the graph of its triangles),
+    /// computed once and shared by the sparse systems solved over the chart (a start's LSCM,
+    /// the method's own system, ABF++'s reduced system and its LSCM reconstruction): see
+    /// [`crate::solvers::ordering::Ordering::Vertices`].
+    pub fn vertex_order(&self) -> &[u32] {
+        self.vertex_order.0.get_or_init(|| crate::solvers::ordering::vertex_order(self.positions.len(), &self.triangles))
+    }
+
+    /// The ordering for a sparse system over the chart's vertices that would compute one of
+    /// `kind`: [`Chart::vertex_order`], shared, except on charts so small that their systems
+    /// are factored dense (no ordering at all) and on charts with quads, whose systems differ
+    /// in their graphs (the barrier methods couple both diagonals of a quad: an order of one
+    /// split's graph gave SLIM's factor 4.6 times the fill on Suzanne's largest chart, and an
+    /// order of both splits LSCM's 15% more).
+    pub fn ordering(&self, kind: crate::solvers::ordering::OrderingKind) -> crate::solvers::ordering::Ordering<'_> {
+        if !self.shares_ordering() {
+            return kind.into();
+        }
+        crate::solvers::ordering::Ordering::Vertices { order: self.vertex_order(), kind }
+    }
+
+    /// [`Chart::ordering`] when the shared order was already computed (a method that shares
+    /// it asked for it first), else `kind` computed for the system itself: a system solved
+    /// alone (the `lscm` method) pays no more for the shared order than for its own.
+    pub fn ordering_if_known(&self, kind: crate::solvers::ordering::OrderingKind) -> crate::solvers::ordering::Ordering<'_> {
+        match self.vertex_order.0.get() {
+            Some(order) if self.shares_ordering() => crate::solvers::ordering::Ordering::Vertices { order, kind },
+            _ => kind.into(),
+        }
+    }
+
+    /// Whether [`Chart::ordering`] shares the vertex order (see there).
+    fn shares_ordering(&self) -> bool {
+        self.quads.is_empty() && self.positions.len() > crate::solvers::DENSE_MAX / 2
+    }
+
     /// The chart's triangles followed by the other diagonal's two triangles of every quad,
     /// and a weight per triangle (1, or ½ for the four triangles of a quad, so each quad
     /// weighs its area once): what a barrier method keeps positive so that quads stay
@@ -543,7 +592,31 @@ fn make_chart(
         genus,
         kind,
         defect,
+        vertex_order: VertexOrder::default(),
     }
+}
+
+/// Tests only: the one chart of a `k × k` vertex grid over the unit square, each cell split
+/// into two triangles, lifted onto a saddle with ripples (not developable).
+#[cfg(test)]
+pub(crate) fn bumpy_grid_chart(k: u32) -> Chart {
+    let mut positions = Vec::new();
+    for j in 0..k {
+        for i in 0..k {
+            let (x, y) = (i as f64 / (k - 1) as f64, j as f64 / (k - 1) as f64);
+            positions.push([x, y, 0.3 * (x * x - y * y) + 0.05 * (9.0 * x).sin() * (7.0 * y).cos()]);
+        }
+    }
+    let mut corners = Vec::new();
+    for j in 0..k - 1 {
+        for i in 0..k - 1 {
+            let v = j * k + i;
+            corners.extend([v, v + 1, v + k + 1, v, v + k + 1, v + k]);
+        }
+    }
+    let sizes = vec![3u32; corners.len() / 3];
+    let mesh = PolyMesh::new(&positions, &corners, &sizes).expect("a valid grid");
+    build_charts(&mesh, &[], None).remove(0)
 }
 
 #[cfg(test)]

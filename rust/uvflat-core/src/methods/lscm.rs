@@ -19,7 +19,7 @@
 
 use super::{chart_angles, ChartFailure, ChartSolution};
 use crate::charts::Chart;
-use crate::solvers::ordering::OrderingKind;
+use crate::solvers::ordering::{Ordering, OrderingKind};
 use crate::solvers::{FixedValueSolver, Symmetry};
 use faer::c64;
 
@@ -135,8 +135,14 @@ impl LscmSolver {
     /// Assemble and factor the LSCM system of `triangles` (over `n` vertices) with the given
     /// corner `angles` and `pinned` vertices (at least two, distinct).
     pub fn new(n: usize, triangles: &[[u32; 3]], angles: &[[f64; 3]], pinned: &[u32]) -> Result<Self, ChartFailure> {
+        Self::with_ordering(n, triangles, angles, pinned, OrderingKind::Amd.into())
+    }
+
+    /// [`LscmSolver::new`] with the given ordering (a chart's shared one, see
+    /// [`Chart::ordering`]).
+    pub fn with_ordering(n: usize, triangles: &[[u32; 3]], angles: &[[f64; 3]], pinned: &[u32], ordering: Ordering<'_>) -> Result<Self, ChartFailure> {
         let trip = conformal_hermitian(triangles, angles);
-        let solver = FixedValueSolver::with_ordering(n, &trip, pinned, Symmetry::Symmetric, OrderingKind::Amd)?;
+        let solver = FixedValueSolver::with_ordering(n, &trip, pinned, Symmetry::Symmetric, ordering)?;
         Ok(LscmSolver { solver, pinned: pinned.to_vec(), n })
     }
 
@@ -165,11 +171,11 @@ pub fn solve_with_angles(
     if pins_span(pins) {
         let pinned: Vec<u32> = pins.iter().map(|p| p.0).collect();
         let uvs: Vec<[f64; 2]> = pins.iter().map(|p| p.1).collect();
-        let s = LscmSolver::new(n, &chart.triangles, angles, &pinned)?;
+        let s = LscmSolver::with_ordering(n, &chart.triangles, angles, &pinned, chart.ordering_if_known(OrderingKind::Amd))?;
         return Ok((s.solve(&uvs)?, None));
     }
     let auto = auto_pins(chart);
-    let s = LscmSolver::new(n, &chart.triangles, angles, &[auto[0].0, auto[1].0])?;
+    let s = LscmSolver::with_ordering(n, &chart.triangles, angles, &[auto[0].0, auto[1].0], chart.ordering_if_known(OrderingKind::Amd))?;
     let mut uv = s.solve(&[auto[0].1, auto[1].1])?;
     let mut note = None;
     if let Some(&(v, target)) = pins.first() {
@@ -272,6 +278,23 @@ pub(crate) fn holes_filled_note(open: (usize, bool), then: Option<String>) -> St
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// LSCM on a bumpy grid chart: solved alone it orders its own system; once the chart's
+    /// shared vertex order exists (a method that shares it asked first) it uses that one.
+    /// Both give the same map to rounding.
+    #[test]
+    fn the_shared_vertex_order_gives_the_same_map() {
+        let chart = crate::charts::bumpy_grid_chart(24);
+        assert!(matches!(chart.ordering_if_known(OrderingKind::Amd), Ordering::Kind(_)), "no shared order before it is asked for");
+        let own = solve(&chart, &[]).unwrap().uv;
+        assert!(matches!(chart.ordering(OrderingKind::Amd), Ordering::Vertices { .. }));
+        assert!(matches!(chart.ordering_if_known(OrderingKind::Amd), Ordering::Vertices { .. }));
+        let shared = solve(&chart, &[]).unwrap().uv;
+        let diff = own.iter().zip(&shared).fold(0.0f64, |m, (a, b)| m.max((a[0] - b[0]).abs()).max((a[1] - b[1]).abs()));
+        assert!(diff < 1e-10, "maps differ by {diff}");
+        // A clone (whose triangles may be changed) computes its own again.
+        assert!(matches!(chart.clone().ordering_if_known(OrderingKind::Amd), Ordering::Kind(_)));
+    }
 
     /// The angle form equals ½ Σ cot α |e_opp|² − A on an arbitrary triangle and map.
     #[test]

@@ -184,10 +184,10 @@ pub fn solve_with_history(
         if !factored {
             return Err(ChartFailure("the MIPS Newton system stays singular after regularisation".into()));
         }
-        let b = [grad.iter().map(|g| -g).collect::<Vec<_>>()];
+        let b: Vec<f64> = grad.iter().map(|g| -g).collect();
         let zeros = vec![0.0; fixed.len()];
-        let x = solver.solve(&[zeros], &b)?;
-        let dir: Vec<[f64; 2]> = (0..n).map(|i| [x[0][2 * i], x[0][2 * i + 1]]).collect();
+        let x = solver.solve_inexact(&zeros, &b, &vec![0.0; 2 * n], super::slim::INEXACT)?;
+        let dir: Vec<[f64; 2]> = (0..n).map(|i| [x[2 * i], x[2 * i + 1]]).collect();
         let out = flip_free_line_search(tris, &mut uv, &dir, it.energy(), |q| mips_energy(&ops, tris, q), &ls);
         if out.step == 0.0 {
             it.stalled();

@@ -74,6 +74,7 @@ use super::nonlinear::pattern::{analysed_beside, block_triplets, interleaved, BL
 use super::nonlinear::pins::{anchor_vertices, anchors, translate_onto_first_pin};
 use super::nonlinear::proxy::reweight;
 use super::nonlinear::start;
+use crate::solvers::ordering::OrderingKind;
 use super::nonlinear::unfold::unfold;
 use super::nonlinear::TriangleOperators;
 use super::{lscm, ChartFailure, ChartSolution, Fallback};
@@ -296,6 +297,15 @@ fn seconds(a: Option<Instant>, b: Option<Instant>) -> f64 {
 
 /// [`solve_with_history`]; `timed` says whether the history's seconds are measured (they are
 /// 0 otherwise; the energies and steps are the same).
+/// Accuracy of the projected Newton steps' solves (SLIM's and MIPS's): the residual of the
+/// step's linear system at most this fraction of its value at the zero step, the energy's
+/// gradient, as in inexact Newton methods (Dembo, Eisenstat, Steihaug, "Inexact Newton
+/// methods", SIAM J. Numer. Anal. 19(2), 1982). Systems factored in single precision are
+/// solved by conjugate gradients to this accuracy, one or two triangular solves instead of a
+/// refinement to double precision ([`FixedValueSolver::solve_inexact`]); on camelhead every
+/// iteration's energy is the same to six digits. SLIM's proxy steps are solved accurately.
+pub(crate) const INEXACT: f64 = 1e-3;
+
 fn solve_timed(chart: &Chart, pins: &[(u32, [f64; 2])], options: &SlimOptions, timed: bool) -> Result<(ChartSolution, SlimHistory), ChartFailure> {
     let clock = Clock(timed);
     let n = chart.positions.len();
@@ -305,8 +315,10 @@ fn solve_timed(chart: &Chart, pins: &[(u32, [f64; 2])], options: &SlimOptions, t
     // barrier of a start that leaves no quad out (the usual case; see below).
     let fixed_ids: Vec<u32> = anchor_vertices(pins).iter().flat_map(|&v| [2 * v, 2 * v + 1]).collect();
     let all_splits = if chart.quads.is_empty() { None } else { Some(chart.triangles_both_splits().0) };
+    // One elimination order of the chart's vertices serves the LSCM start and the global step.
+    let ordering = chart.ordering(OrderingKind::Auto);
     let ((start, rejected), mut analysed) =
-        analysed_beside(2 * n, all_splits.as_deref().unwrap_or(&chart.triangles), interleaved, &fixed_ids, || pick_start(chart, pins, &ops, options));
+        analysed_beside(2 * n, all_splits.as_deref().unwrap_or(&chart.triangles), interleaved, &fixed_ids, ordering, || pick_start(chart, pins, &ops, options));
     drop(all_splits);
     let start_seconds = seconds(t_start, clock.now());
     let Some((mut uv, mut energy, start_name)) = start else {
@@ -337,7 +349,7 @@ fn solve_timed(chart: &Chart, pins: &[(u32, [f64; 2])], options: &SlimOptions, t
     let local = &BLOCK;
     let fixed = anchors(pins, &uv);
     debug_assert!(fixed.iter().map(|p| p.0).eq(fixed_ids.iter().step_by(2).map(|&u| u / 2)));
-    let fixed_vals = vec![fixed.iter().flat_map(|p| [p.1[0], p.1[1]]).collect::<Vec<f64>>()];
+    let fixed_vals: Vec<f64> = fixed.iter().flat_map(|p| [p.1[0], p.1[1]]).collect();
     // The analysis made beside the start holds when the barrier is every triangle of both
     // splits, i.e. no quad's other split was left out.
     if left_out > 0 {
@@ -349,7 +361,7 @@ fn solve_timed(chart: &Chart, pins: &[(u32, [f64; 2])], options: &SlimOptions, t
     let mut it = Iteration::new(energy, options.max_iterations, options.tolerance, Change::OfPrevious, 0.0).extrapolating();
     let mut stopped = None;
     let (mut newton_steps, mut newton_failed) = (0usize, false);
-    let zero_fixed = vec![vec![0.0; fixed_ids.len()]];
+    let zero_fixed = vec![0.0; fixed_ids.len()];
     let mut newton = false;
     // A start at energy 1 (every triangle isometric, e.g. `unfold`; the energy is normalised) is
     // the global minimiser: there is nothing to iterate.
@@ -371,9 +383,9 @@ fn solve_timed(chart: &Chart, pins: &[(u32, [f64; 2])], options: &SlimOptions, t
             let s = solver.as_mut().expect("Newton steps follow a SLIM step");
             let factored = s.refactor(&values);
             let t2 = clock.now();
-            match factored.and_then(|()| s.solve(&zero_fixed, &[b])) {
+            match factored.and_then(|()| s.solve_inexact(&zero_fixed, &b, &vec![0.0; 2 * n], INEXACT)) {
                 Ok(x) => {
-                    let dir: Vec<[f64; 2]> = (0..n).map(|i| [x[0][2 * i], x[0][2 * i + 1]]).collect();
+                    let dir: Vec<[f64; 2]> = (0..n).map(|i| [x[2 * i], x[2 * i + 1]]).collect();
                     let t3 = clock.now();
                     let out = flip_free_line_search(tris, &mut uv, &dir, it.energy(), |q| symmetric_dirichlet(&ops, tris, q), &ls);
                     let t4 = clock.now();
@@ -437,7 +449,7 @@ fn solve_timed(chart: &Chart, pins: &[(u32, [f64; 2])], options: &SlimOptions, t
                 // values, so the value array is given back until the solver has its own copy.
                 let len = values.len();
                 drop(std::mem::take(&mut values));
-                let made = FixedValueSolver::new(2 * n, &pattern, &fixed_ids, Symmetry::Symmetric).map(|s| solver = Some(s));
+                let made = FixedValueSolver::with_ordering(2 * n, &pattern, &fixed_ids, Symmetry::Symmetric, ordering).map(|s| solver = Some(s));
                 // The solver keeps the pattern; this copy is not needed again.
                 drop(pattern);
                 values = vec![0.0; len];
@@ -447,14 +459,16 @@ fn solve_timed(chart: &Chart, pins: &[(u32, [f64; 2])], options: &SlimOptions, t
         };
         let t2 = clock.now();
         // A failed global step (extreme weights) ends the iteration; the current map is valid.
-        let x = match factored.and_then(|()| solver.as_ref().expect("factored above").solve(&fixed_vals, &[b])) {
-            Ok(x) => x,
+        // The proxy step is solved accurately: an inexact one (below) made the first step's
+        // flip-free bound three times shorter on camelhead split once, and took an iteration more.
+        let x = match factored.and_then(|()| solver.as_ref().expect("factored above").solve(&[fixed_vals.clone()], &[b])) {
+            Ok(mut x) => x.pop().unwrap_or_default(),
             Err(e) => {
                 stopped = Some(e.to_string());
                 break;
             }
         };
-        let dir: Vec<[f64; 2]> = (0..n).map(|i| [x[0][2 * i] - uv[i][0], x[0][2 * i + 1] - uv[i][1]]).collect();
+        let dir: Vec<[f64; 2]> = (0..n).map(|i| [x[2 * i] - uv[i][0], x[2 * i + 1] - uv[i][1]]).collect();
         let t3 = clock.now();
         let out = flip_free_line_search(tris, &mut uv, &dir, it.energy(), |q| symmetric_dirichlet(&ops, tris, q), &ls);
         let t4 = clock.now();

@@ -1,12 +1,13 @@
 //! Shared solver pieces: the quadratic-with-fixed-values solver behind every linear method
 //! (and the global steps of the iterative ones).
 
+pub mod conjugate_gradient;
 pub mod line_search;
 pub mod ordering;
 mod quadratic;
 pub mod refined_llt;
 
-pub use quadratic::{FixedValueSolver, Scalar, Symmetry};
+pub use quadratic::{FixedValueSolver, Scalar, Symmetry, DENSE_MAX};
 #[cfg(test)]
 pub(crate) use quadratic::FORCE_SPARSE;
 

@@ -57,6 +57,109 @@ impl OrderingKind {
     }
 }
 
+/// The ordering a solver uses: computed, or derived from an elimination order of the mesh
+/// vertices that the system's unknowns belong to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Ordering<'a> {
+    /// Compute one of this kind from the system's pattern.
+    Kind(OrderingKind),
+    /// Derive it from `order` (vertices in elimination order, e.g. [`crate::charts::Chart::vertex_order`],
+    /// an AMD ordering of the chart's vertex graph): the unknowns of vertex `v` are `k·v ..
+    /// k·v + k` for `k` = unknowns / vertices (1 or 2), taken in that order, fixed ones
+    /// skipped. Several systems over one chart (a start's LSCM, the method's own) then share
+    /// one ordering instead of computing it each. Used where `kind` would compute AMD for the
+    /// free unknowns (a nested dissection for a large system is computed as before), and
+    /// when the order covers every vertex once.
+    Vertices { order: &'a [u32], kind: OrderingKind },
+}
+
+impl From<OrderingKind> for Ordering<'_> {
+    fn from(kind: OrderingKind) -> Self {
+        Ordering::Kind(kind)
+    }
+}
+
+impl Ordering<'_> {
+    /// The kind this ordering computes, or stands in for.
+    pub fn kind(&self) -> OrderingKind {
+        match *self {
+            Ordering::Kind(kind) | Ordering::Vertices { kind, .. } => kind,
+        }
+    }
+
+    /// The permutation of the free unknowns of an `n`-unknown system (`free_pos[u]`: free
+    /// index of unknown `u`, `u32::MAX` when fixed; `nf` free) that a vertex order gives
+    /// ([`Ordering::Vertices`]), or `None` when it does not apply.
+    pub fn of_vertices(&self, n: usize, free_pos: &[u32], nf: usize) -> Option<Permutation> {
+        let Ordering::Vertices { order, kind } = *self else {
+            return None;
+        };
+        if order.is_empty() || n % order.len() != 0 || !(1..=2).contains(&(n / order.len())) || kind.resolve(nf) != OrderingKind::Amd {
+            return None;
+        }
+        let k = n / order.len();
+        let mut seen = vec![false; order.len()];
+        let mut fwd = Vec::with_capacity(nf);
+        for &v in order {
+            let v = v as usize;
+            if v >= seen.len() || std::mem::replace(&mut seen[v], true) {
+                return None;
+            }
+            for u in k * v..k * v + k {
+                if free_pos[u] != u32::MAX {
+                    fwd.push(free_pos[u] as usize);
+                }
+            }
+        }
+        (fwd.len() == nf).then(|| Permutation { blocks: k == 2, ..Permutation::from_fwd(fwd) })
+    }
+}
+
+/// AMD elimination order of the vertex graph of `triangles` over `n` vertices (vertices
+/// in elimination order), for [`Ordering::Vertices`]. The identity when the ordering fails.
+pub fn vertex_order(n: usize, triangles: &[[u32; 3]]) -> Vec<u32> {
+    // Neighbours of every vertex (with repeats), then each list sorted and made unique.
+    let mut start = vec![0usize; n + 1];
+    for t in triangles {
+        for &v in t {
+            start[v as usize + 1] += 2;
+        }
+    }
+    for v in 0..n {
+        start[v + 1] += start[v];
+    }
+    let mut at = start.clone();
+    let mut all = vec![0usize; start[n]];
+    for t in triangles {
+        for k in 0..3 {
+            let v = t[k] as usize;
+            all[at[v]] = t[(k + 1) % 3] as usize;
+            all[at[v] + 1] = t[(k + 2) % 3] as usize;
+            at[v] += 2;
+        }
+    }
+    drop(at);
+    let mut col_ptr = Vec::with_capacity(n + 1);
+    col_ptr.push(0usize);
+    let mut row_idx = Vec::with_capacity(all.len() / 2);
+    for v in 0..n {
+        let seg = &mut all[start[v]..start[v + 1]];
+        seg.sort_unstable();
+        let first = row_idx.len();
+        for &u in seg.iter() {
+            if row_idx.len() == first || row_idx[row_idx.len() - 1] != u {
+                row_idx.push(u);
+            }
+        }
+        col_ptr.push(row_idx.len());
+    }
+    drop(all);
+    match amd(n, &col_ptr, &row_idx) {
+        Ok(p) => p.fwd.into_iter().map(|v| v as u32).collect(),
+        Err(_) => (0..n as u32).collect(),
+    }
+}
+
 /// A symmetric permutation as faer takes it: `fwd[new] = old`, `inv[old] = new`.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Permutation {
@@ -815,5 +918,90 @@ mod tests {
         }
         // A graph without twins is not compressed.
         assert!(grid_graph.compress().is_none());
+    }
+
+    /// A shared vertex order gives every free unknown once, in its vertex's place (both
+    /// unknowns of a vertex together, fixed ones skipped), and is declined where it does not
+    /// fit: a size that is not one or two unknowns per vertex, an order that repeats or misses
+    /// a vertex, and a system large enough for nested dissection.
+    #[test]
+    fn vertex_orders_expand_to_the_free_unknowns_or_are_declined() {
+        let order = [2u32, 0, 3, 1];
+        let shared = Ordering::Vertices { order: &order, kind: OrderingKind::Auto };
+        // Two unknowns per vertex; vertex 3's unknowns fixed: free numbering 0..6.
+        let mut free_pos = vec![u32::MAX; 8];
+        let mut k = 0;
+        for u in 0..8 {
+            if u / 2 != 3 {
+                free_pos[u] = k;
+                k += 1;
+            }
+        }
+        let p = shared.of_vertices(8, &free_pos, 6).expect("applies");
+        assert_eq!(p.fwd, vec![4, 5, 0, 1, 2, 3]);
+        assert!(p.blocks);
+        for (new, &old) in p.fwd.iter().enumerate() {
+            assert_eq!(p.inv[old], new);
+        }
+        // One unknown per vertex, none fixed.
+        let ident: Vec<u32> = (0..4).collect();
+        let p = shared.of_vertices(4, &ident, 4).expect("applies");
+        assert_eq!(p.fwd, vec![2, 0, 3, 1]);
+        assert!(!p.blocks);
+        // Declined.
+        assert!(shared.of_vertices(12, &[0; 12], 12).is_none(), "three unknowns per vertex");
+        let repeated = [2u32, 0, 2, 1];
+        assert!(Ordering::Vertices { order: &repeated, kind: OrderingKind::Auto }.of_vertices(4, &ident, 4).is_none());
+        let big: Vec<u32> = (0..ND_MIN_SIZE as u32).collect();
+        let pos: Vec<u32> = (0..ND_MIN_SIZE as u32).collect();
+        assert!(Ordering::Vertices { order: &big, kind: OrderingKind::Auto }.of_vertices(ND_MIN_SIZE, &pos, ND_MIN_SIZE).is_none());
+        assert!(Ordering::Vertices { order: &big, kind: OrderingKind::Amd }.of_vertices(ND_MIN_SIZE, &pos, ND_MIN_SIZE).is_some());
+        assert!(Ordering::from(OrderingKind::Amd).of_vertices(4, &ident, 4).is_none());
+    }
+
+    /// The vertex order of a triangulated grid is a permutation whose fill is close to AMD's
+    /// on the same graph given as a matrix pattern (the orders differ only in tie-breaking).
+    #[test]
+    fn the_vertex_order_of_a_mesh_is_an_amd_order_of_its_graph() {
+        let k = 30usize;
+        let id = |i: usize, j: usize| (j * k + i) as u32;
+        let mut tris = Vec::new();
+        for j in 0..k - 1 {
+            for i in 0..k - 1 {
+                tris.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+                tris.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+        let n = k * k;
+        let order = vertex_order(n, &tris);
+        let mut seen = vec![false; n];
+        for &v in &order {
+            assert!(!std::mem::replace(&mut seen[v as usize], true), "vertex {v} twice");
+        }
+        assert!(seen.iter().all(|&s| s));
+        // Lower pattern of the triangle graph, for the symbolic factorization.
+        let mut edges: Vec<(usize, usize)> = tris.iter().flat_map(|t| (0..3).map(move |a| (t[a].max(t[(a + 1) % 3]) as usize, t[a].min(t[(a + 1) % 3]) as usize))).collect();
+        edges.extend((0..n).map(|v| (v, v)));
+        edges.sort_unstable_by_key(|&(r, c)| (c, r));
+        edges.dedup();
+        let mut col_ptr = vec![0usize; n + 1];
+        for &(_, c) in &edges {
+            col_ptr[c + 1] += 1;
+        }
+        for c in 0..n {
+            col_ptr[c + 1] += col_ptr[c];
+        }
+        let row_idx: Vec<usize> = edges.iter().map(|e| e.0).collect();
+        let a = faer::sparse::SymbolicSparseColMatRef::new_checked(n, n, &col_ptr, None, &row_idx);
+        let fill = |fwd: Vec<usize>| {
+            let p = Permutation::from_fwd(fwd);
+            let perm = faer::perm::PermRef::new_checked(&p.fwd, &p.inv, n);
+            faer::sparse::linalg::cholesky::factorize_symbolic_cholesky(a, faer::Side::Lower, faer::sparse::linalg::cholesky::SymmetricOrdering::Custom(perm), Default::default()).unwrap().len_val()
+        };
+        let shared = fill(order.iter().map(|&v| v as usize).collect());
+        let own = fill(fill_reducing(OrderingKind::Amd, n, &col_ptr, &row_idx).unwrap().fwd);
+        let natural = fill((0..n).collect());
+        assert!((shared as f64) < 1.1 * own as f64, "shared {shared}, own {own}");
+        assert!(shared < natural, "shared {shared}, natural {natural}");
     }
 }

@@ -24,7 +24,7 @@ use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::{Pair, SparseColMatRef, SymbolicSparseColMat};
 use faer::{Mat, Side};
 
-use super::ordering::{fill_reducing, symbolic_params, OrderingKind};
+use super::ordering::{fill_reducing, symbolic_params, Ordering, OrderingKind};
 use super::refined_llt::{self, RefinedLlt};
 use super::SolveError;
 
@@ -205,12 +205,15 @@ enum Symbolic<T: Scalar> {
     /// Cholesky with our fill-reducing ordering (see [`super::ordering`]); the factor's values
     /// and the factorization/solve scratch are allocated once and reused by every refactor
     /// (the scratch behind a mutex, so that `solve(&self)` can use it and the solver stays
-    /// `Sync`).
+    /// `Sync`). The free unknowns are numbered in elimination order and `Q_FF` is stored in
+    /// the triangle `side` that faer's numeric factorization reads (lower for supernodal,
+    /// upper for simplicial factors), so a refactorization neither permutes nor transposes
+    /// it (on camelhead's SLIM system that permutation was about 6% of each factorization).
     ///
     /// Systems refactored every iteration ([`OrderingKind::Auto`]) of at least
     /// [`refined_llt::MIXED_MIN`] free unknowns are factored in single precision and solved
     /// by iterative refinement to double-precision accuracy ([`refined_llt`]).
-    Llt { symbolic: Box<SymbolicCholesky<usize>>, state: std::sync::Mutex<LltState<T>> },
+    Llt { symbolic: Box<SymbolicCholesky<usize>>, side: Side, state: std::sync::Mutex<LltState<T>> },
     Lu(SymbolicLu<usize>),
     /// At most [`DENSE_MAX`] free unknowns: dense factorizations, no symbolic analysis (the
     /// charts of one or a few faces that Smart UV Project makes by the thousand).
@@ -257,6 +260,8 @@ fn dense_max() -> usize {
 enum Slot {
     /// Entry of `Q_FF`: its position in the compressed columns (duplicates share one).
     FreeFree(u32),
+    /// Entry of `Q_FF` stored as its mirror in the other triangle: add the conjugate.
+    FreeFreeConj(u32),
     /// Entry of `Q_FC`: (free row, fixed column position).
     FreeFixed(u32, u32),
     /// Upper-triangle entry of `Q_FC` given by its lower mirror: use the conjugate.
@@ -317,6 +322,45 @@ fn compressed_order(n: usize, pairs: &[Pair<usize, usize>]) -> Vec<u32> {
     order
 }
 
+/// Flag of a [`renumbered`] position: the entry is stored as its mirror (conjugated).
+const CONJUGATE: u32 = 1 << 31;
+
+/// The Hermitian pattern `a` (one triangle, compressed columns) renumbered by `inv` (new
+/// index of every old one) into the triangle `side` of the new numbering, rows sorted, and
+/// the new position of every old entry, with [`CONJUGATE`] set where the entry crossed the
+/// diagonal (its mirror is stored).
+fn renumbered(a: faer::sparse::SymbolicSparseColMatRef<'_, usize>, inv: &[usize], side: Side) -> (SymbolicSparseColMat<usize>, Vec<u32>) {
+    let n = a.ncols();
+    let mut pairs = Vec::with_capacity(a.row_idx().len());
+    let mut crossed = Vec::with_capacity(a.row_idx().len());
+    for c in 0..n {
+        for &r in a.row_idx_of_col_raw(c) {
+            let (i, j) = (inv[r], inv[c]);
+            let (row, col) = match side {
+                Side::Lower => (i.max(j), i.min(j)),
+                Side::Upper => (i.min(j), i.max(j)),
+            };
+            crossed.push(row != i);
+            pairs.push(Pair { row, col });
+        }
+    }
+    // No duplicates: `a` has none and renumbering is one to one.
+    let order = compressed_order(n, &pairs);
+    let mut col_ptr = vec![0usize; n + 1];
+    let mut row_idx = Vec::with_capacity(pairs.len());
+    let mut moved = vec![0u32; pairs.len()];
+    for (at, &e) in order.iter().enumerate() {
+        let k = (e & !DUPLICATE) as usize;
+        row_idx.push(pairs[k].row);
+        col_ptr[pairs[k].col + 1] += 1;
+        moved[k] = at as u32 | if crossed[k] { CONJUGATE } else { 0 };
+    }
+    for c in 0..n {
+        col_ptr[c + 1] += col_ptr[c];
+    }
+    (SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx), moved)
+}
+
 /// The quadratic-with-fixed-values solver (see the module docs).
 pub struct FixedValueSolver<T: Scalar = f64> {
     n: usize,
@@ -344,7 +388,7 @@ impl<T: Scalar> FixedValueSolver<T> {
     /// refactored many times (nested dissection on large systems); a system factored once
     /// should use [`FixedValueSolver::with_ordering`] with [`OrderingKind::Amd`].
     pub fn new(n: usize, triplets: &[(u32, u32, T)], fixed: &[u32], symmetry: Symmetry) -> Result<Self, SolveError> {
-        Self::new_with_dense_max(n, triplets, fixed, symmetry, dense_max(), OrderingKind::Auto)
+        Self::new_with_dense_max(n, triplets, fixed, symmetry, dense_max(), OrderingKind::Auto.into())
     }
 
     /// The analysis of [`FixedValueSolver::new`] without a factorization: the triplets give
@@ -357,7 +401,7 @@ impl<T: Scalar> FixedValueSolver<T> {
     /// Preconditions and failures as [`FixedValueSolver::new`], except that no factorization
     /// can fail here. Reads this thread's test switches (dense path, precision) when called.
     pub fn analyse(n: usize, triplets: &[(u32, u32, T)], fixed: &[u32], symmetry: Symmetry) -> Result<Self, SolveError> {
-        Self::analysed(n, triplets, fixed, symmetry, dense_max(), OrderingKind::Auto)
+        Self::analysed(n, triplets, fixed, symmetry, dense_max(), OrderingKind::Auto.into())
     }
 
     /// [`FixedValueSolver::new`] with the given fill-reducing ordering of `Q_FF` (used by its
@@ -367,8 +411,14 @@ impl<T: Scalar> FixedValueSolver<T> {
     /// factorization of a large system (see [`crate::solvers::ordering`]): for a system
     /// factored once (LSCM, Tutte, harmonic, mean value) AMD is the faster choice at every
     /// size measured.
-    pub fn with_ordering(n: usize, triplets: &[(u32, u32, T)], fixed: &[u32], symmetry: Symmetry, ordering: OrderingKind) -> Result<Self, SolveError> {
-        Self::new_with_dense_max(n, triplets, fixed, symmetry, dense_max(), ordering)
+    pub fn with_ordering<'a>(n: usize, triplets: &[(u32, u32, T)], fixed: &[u32], symmetry: Symmetry, ordering: impl Into<Ordering<'a>>) -> Result<Self, SolveError> {
+        Self::new_with_dense_max(n, triplets, fixed, symmetry, dense_max(), ordering.into())
+    }
+
+    /// [`FixedValueSolver::analyse`] with the given ordering (see
+    /// [`FixedValueSolver::with_ordering`]).
+    pub fn analyse_with<'a>(n: usize, triplets: &[(u32, u32, T)], fixed: &[u32], symmetry: Symmetry, ordering: impl Into<Ordering<'a>>) -> Result<Self, SolveError> {
+        Self::analysed(n, triplets, fixed, symmetry, dense_max(), ordering.into())
     }
 
     /// [`FixedValueSolver::with_ordering`], factoring dense up to `dense_max` free unknowns.
@@ -378,7 +428,7 @@ impl<T: Scalar> FixedValueSolver<T> {
         fixed: &[u32],
         symmetry: Symmetry,
         dense_max: usize,
-        ordering: OrderingKind,
+        ordering: Ordering<'_>,
     ) -> Result<Self, SolveError> {
         let mut solver = Self::analysed(n, triplets, fixed, symmetry, dense_max, ordering)?;
         solver.load_values(triplets.iter().map(|t| t.2));
@@ -394,7 +444,7 @@ impl<T: Scalar> FixedValueSolver<T> {
         fixed: &[u32],
         symmetry: Symmetry,
         dense_max: usize,
-        ordering: OrderingKind,
+        ordering: Ordering<'_>,
     ) -> Result<Self, SolveError> {
         let mut free_pos = vec![0u32; n];
         for &c in fixed {
@@ -454,24 +504,53 @@ impl<T: Scalar> FixedValueSolver<T> {
             }
         }
         drop(position);
-        let nnz_ff = ff_symbolic.row_idx().len();
-        let symbolic = match symmetry {
+        let (ff_symbolic, symbolic) = match symmetry {
             Symmetry::Symmetric => {
                 let other = |e: &dyn std::fmt::Debug| SolveError::Other(format!("{e:?}"));
                 let a = ff_symbolic.as_ref();
-                let perm = fill_reducing(ordering, nf, a.col_ptr(), a.row_idx()).map_err(|e| other(&e))?;
-                let perm_ref = faer::perm::PermRef::new_checked(&perm.fwd, &perm.inv, nf);
-                let symbolic = factorize_symbolic_cholesky(a, Side::Lower, SymmetricOrdering::Custom(perm_ref), symbolic_params(&perm))
+                let perm = match ordering.of_vertices(n, &free_pos, nf) {
+                    Some(perm) => perm,
+                    None => fill_reducing(ordering.kind(), nf, a.col_ptr(), a.row_idx()).map_err(|e| other(&e))?,
+                };
+                // The free unknowns are renumbered in elimination order and `Q_FF` is kept in
+                // that order, in the triangle the factorization reads (lower for supernodal,
+                // upper for simplicial factors): no refactorization permutes or transposes it.
+                // (faer's analysis without an ordering reads the upper triangle.)
+                let (upper, moved) = renumbered(a, &perm.inv, Side::Upper);
+                let symbolic = factorize_symbolic_cholesky(upper.as_ref(), Side::Upper, SymmetricOrdering::Identity, symbolic_params(&perm))
                     .map_err(|e| other(&e))?;
+                let side = match symbolic.raw() {
+                    faer::sparse::linalg::cholesky::SymbolicCholeskyRaw::Simplicial(_) => Side::Upper,
+                    _ => Side::Lower,
+                };
+                let (stored, moved) = if side == Side::Lower {
+                    drop((upper, moved));
+                    renumbered(a, &perm.inv, Side::Lower)
+                } else {
+                    (upper, moved)
+                };
+                for slot in slots.iter_mut() {
+                    *slot = match *slot {
+                        Slot::FreeFree(k) if moved[k as usize] & CONJUGATE != 0 => Slot::FreeFreeConj(moved[k as usize] & !CONJUGATE),
+                        Slot::FreeFree(k) => Slot::FreeFree(moved[k as usize]),
+                        Slot::FreeFixed(r, c) => Slot::FreeFixed(perm.inv[r as usize] as u32, c),
+                        Slot::FreeFixedConj(r, c) => Slot::FreeFixedConj(perm.inv[r as usize] as u32, c),
+                        other => other,
+                    };
+                }
+                drop(moved);
+                free = perm.fwd.iter().map(|&old| free[old]).collect();
                 let par = faer::get_global_parallelism();
                 let mem = MemBuffer::try_new(RefinedLlt::<T>::scratch(&symbolic, par, 2)).map_err(|e| other(&e))?;
-                let factor = RefinedLlt::new(ordering == OrderingKind::Auto && refined_llt::single_pays(nf));
-                Symbolic::Llt { symbolic: Box::new(symbolic), state: std::sync::Mutex::new(LltState { factor, mem }) }
+                let factor = RefinedLlt::new(ordering.kind() == OrderingKind::Auto && refined_llt::single_pays(nf));
+                (stored, Symbolic::Llt { symbolic: Box::new(symbolic), side, state: std::sync::Mutex::new(LltState { factor, mem }) })
             }
             Symmetry::General => {
-                Symbolic::Lu(SymbolicLu::try_new(ff_symbolic.as_ref()).map_err(|e| SolveError::Other(format!("{e:?}")))?)
+                let lu = Symbolic::Lu(SymbolicLu::try_new(ff_symbolic.as_ref()).map_err(|e| SolveError::Other(format!("{e:?}")))?);
+                (ff_symbolic, lu)
             }
         };
+        let nnz_ff = ff_symbolic.row_idx().len();
         Ok(Self::of_analysis(n, fixed, symmetry, free, slots, ff_symbolic, nnz_ff, symbolic))
     }
 
@@ -539,6 +618,7 @@ impl<T: Scalar> FixedValueSolver<T> {
         for (slot, v) in self.slots.iter().zip(values) {
             match *slot {
                 Slot::FreeFree(k) => self.ff_values[k as usize] += v,
+                Slot::FreeFreeConj(k) => self.ff_values[k as usize] += v.conjugate(),
                 Slot::FreeFixed(r, c) => self.coupling.push((r, c, v)),
                 Slot::FreeFixedConj(r, c) => self.coupling.push((r, c, v.conjugate())),
                 Slot::Unused => {}
@@ -550,11 +630,11 @@ impl<T: Scalar> FixedValueSolver<T> {
     fn factor_loaded(&mut self) -> Result<(), SolveError> {
         self.factor = None;
         self.factor = Some(match &mut self.symbolic {
-            Symbolic::Llt { symbolic, state } => {
+            Symbolic::Llt { symbolic, side, state } => {
                 let mat = SparseColMatRef::new(self.ff_symbolic.as_ref(), &self.ff_values);
                 let par = faer::get_global_parallelism();
                 let state = state.get_mut().unwrap_or_else(std::sync::PoisonError::into_inner);
-                state.factor.factor(symbolic, mat, Side::Lower, par, MemStack::new(&mut state.mem))?;
+                state.factor.factor(symbolic, mat, *side, par, MemStack::new(&mut state.mem))?;
                 Factor::Llt
             }
             Symbolic::Lu(sym) => Factor::Lu(Box::new(Lu::try_new_with_symbolic(sym.clone(), SparseColMatRef::new(self.ff_symbolic.as_ref(), &self.ff_values)).map_err(|e| match e {
@@ -629,6 +709,51 @@ impl<T: Scalar> FixedValueSolver<T> {
         self.symmetry
     }
 
+    /// Solve for one column (`fixed_values`, linear term `b` of length n or empty) to the
+    /// accuracy an inexact Newton step needs: the residual `relative` times its value at
+    /// `guess` (length n). A single-precision factor ([`refined_llt`]) is used as the
+    /// preconditioner of conjugate gradients from the guess
+    /// ([`RefinedLlt::solve_inexact`]): one or two triangular solves instead of the several
+    /// of a refinement to double-precision accuracy. A double-precision factor solves
+    /// directly; dense and LU factors, and a run that does not converge, give the direct
+    /// solve of [`FixedValueSolver::solve`]. Failures: as
+    /// [`FixedValueSolver::solve`].
+    pub fn solve_inexact(&self, fixed_values: &[T], b: &[T], guess: &[T], relative: f64) -> Result<Vec<T>, SolveError> {
+        if let (Some(Factor::Llt), Symbolic::Llt { symbolic, state, .. }) = (&self.factor, &self.symbolic) {
+            let mut state = state.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+            let state = &mut *state;
+            let rhs = self.free_rhs(fixed_values, b);
+            let mut y: Vec<T> = self.free.iter().map(|&g| guess[g as usize]).collect();
+            let mat = SparseColMatRef::new(self.ff_symbolic.as_ref(), &self.ff_values);
+            let par = faer::get_global_parallelism();
+            if state.factor.solve_inexact(symbolic, mat, &rhs, &mut y, relative, par, MemStack::new(&mut state.mem))? {
+                return Ok(self.full(&y, fixed_values));
+            }
+        }
+        Ok(self.solve(&[fixed_values.to_vec()], &[b.to_vec()])?.pop().unwrap_or_default())
+    }
+
+    /// `b_F − Q_FC x_C` for one column (`b` of length n, or empty for zero).
+    fn free_rhs(&self, fixed_values: &[T], b: &[T]) -> Vec<T> {
+        let mut rhs: Vec<T> = if b.is_empty() { vec![T::zero_value(); self.free.len()] } else { self.free.iter().map(|&g| b[g as usize]).collect() };
+        for &(r, c, v) in &self.coupling {
+            rhs[r as usize] -= v * fixed_values[c as usize];
+        }
+        rhs
+    }
+
+    /// The full solution vector of the free values `y` and the fixed `fixed_values`.
+    fn full(&self, y: &[T], fixed_values: &[T]) -> Vec<T> {
+        let mut x = vec![T::zero_value(); self.n];
+        for (&g, &v) in self.free.iter().zip(y) {
+            x[g as usize] = v;
+        }
+        for (&c, &v) in self.fixed.iter().zip(fixed_values) {
+            x[c as usize] = v;
+        }
+        x
+    }
+
     /// Solve for several right-hand sides at once. Column `k` has fixed values
     /// `fixed_values[k]` (one per fixed unknown) and linear term `b[k]` (length n, or empty
     /// for zero). Returns the full solution vectors (fixed unknowns hold their values).
@@ -654,7 +779,7 @@ impl<T: Scalar> FixedValueSolver<T> {
             }
         }
         match (&self.factor, &self.symbolic) {
-            (Some(Factor::Llt), Symbolic::Llt { symbolic, state }) => {
+            (Some(Factor::Llt), Symbolic::Llt { symbolic, side, state }) => {
                 let par = faer::get_global_parallelism();
                 let mut state = state.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
                 let state = &mut *state;
@@ -663,7 +788,7 @@ impl<T: Scalar> FixedValueSolver<T> {
                     state.mem = MemBuffer::try_new(RefinedLlt::<T>::scratch(symbolic, par, k)).map_err(|e| SolveError::Other(format!("{e:?}")))?;
                 }
                 let mat = SparseColMatRef::new(self.ff_symbolic.as_ref(), &self.ff_values);
-                state.factor.solve_in_place(symbolic, mat, Side::Lower, rhs.as_mut(), par, MemStack::new(&mut state.mem))?;
+                state.factor.solve_in_place(symbolic, mat, *side, rhs.as_mut(), par, MemStack::new(&mut state.mem))?;
             }
             (Some(Factor::Lu(f)), _) => f.solve_in_place(rhs.as_mut()),
             (Some(Factor::DenseLlt), _) => unreachable!("solved by solve_dense_cholesky"),
@@ -723,8 +848,8 @@ mod tests {
                 let wgt = 1.0 + 0.1 * k as f64;
                 t.extend([(a, a, wgt), (c, c, wgt), (c, a, -wgt + skew), (a, c, -wgt - skew)]);
             }
-            let dense = FixedValueSolver::new_with_dense_max(n, &t, &fixed, sym, usize::MAX, OrderingKind::Auto).unwrap();
-            let sparse = FixedValueSolver::new_with_dense_max(n, &t, &fixed, sym, 0, OrderingKind::Auto).unwrap();
+            let dense = FixedValueSolver::new_with_dense_max(n, &t, &fixed, sym, usize::MAX, OrderingKind::Auto.into()).unwrap();
+            let sparse = FixedValueSolver::new_with_dense_max(n, &t, &fixed, sym, 0, OrderingKind::Auto.into()).unwrap();
             assert!(matches!(dense.symbolic, Symbolic::Dense) && !matches!(sparse.symbolic, Symbolic::Dense));
             let (xd, xs) = (dense.solve(&fixed_values, &b).unwrap(), sparse.solve(&fixed_values, &b).unwrap());
             for i in 0..n {
@@ -739,8 +864,8 @@ mod tests {
             t.extend([(a, a, faer::c64::new(wgt, 0.0)), (c, c, faer::c64::new(wgt, 0.0)), (lo, hi, faer::c64::new(-0.9 * wgt, 0.2))]);
         }
         let fv = vec![vec![faer::c64::new(1.0, 1.0), faer::c64::new(0.0, -1.0), faer::c64::new(2.0, 0.0)]];
-        let dense = FixedValueSolver::new_with_dense_max(n, &t, &fixed, Symmetry::Symmetric, usize::MAX, OrderingKind::Auto).unwrap();
-        let sparse = FixedValueSolver::new_with_dense_max(n, &t, &fixed, Symmetry::Symmetric, 0, OrderingKind::Auto).unwrap();
+        let dense = FixedValueSolver::new_with_dense_max(n, &t, &fixed, Symmetry::Symmetric, usize::MAX, OrderingKind::Auto.into()).unwrap();
+        let sparse = FixedValueSolver::new_with_dense_max(n, &t, &fixed, Symmetry::Symmetric, 0, OrderingKind::Auto.into()).unwrap();
         let (xd, xs) = (dense.solve(&fv, &[]).unwrap(), sparse.solve(&fv, &[]).unwrap());
         for i in 0..n {
             let d = xd[0][i] - xs[0][i];
@@ -750,7 +875,7 @@ mod tests {
         let lap: Vec<(u32, u32, f64)> = edges.iter().flat_map(|&(a, c)| [(a, a, 1.0), (c, c, 1.0), (c, a, -1.0), (a, c, -1.0)]).collect();
         for dense_max in [0, usize::MAX] {
             for sym in [Symmetry::Symmetric, Symmetry::General] {
-                assert!(FixedValueSolver::new_with_dense_max(n + 1, &lap, &[0], sym, dense_max, OrderingKind::Auto).is_err(), "{sym:?} {dense_max}");
+                assert!(FixedValueSolver::new_with_dense_max(n + 1, &lap, &[0], sym, dense_max, OrderingKind::Auto.into()).is_err(), "{sym:?} {dense_max}");
             }
         }
     }
@@ -771,9 +896,9 @@ mod tests {
         let b = vec![(0..n).map(|i| (i as f64 * 0.7).cos()).collect::<Vec<f64>>()];
         for sym in [Symmetry::Symmetric, Symmetry::General] {
             for dense_max in [0, usize::MAX] {
-                let made = FixedValueSolver::new_with_dense_max(n, &t, &fixed, sym, dense_max, OrderingKind::Auto).unwrap();
+                let made = FixedValueSolver::new_with_dense_max(n, &t, &fixed, sym, dense_max, OrderingKind::Auto.into()).unwrap();
                 let zeros: Vec<(u32, u32, f64)> = t.iter().map(|&(r, c, _)| (r, c, 0.0)).collect();
-                let mut later = FixedValueSolver::analysed(n, &zeros, &fixed, sym, dense_max, OrderingKind::Auto).unwrap();
+                let mut later = FixedValueSolver::analysed(n, &zeros, &fixed, sym, dense_max, OrderingKind::Auto.into()).unwrap();
                 assert!(later.solve(&fv, &b).is_err(), "{sym:?} {dense_max}: solved before any factorization");
                 let values: Vec<f64> = t.iter().map(|e| e.2).collect();
                 later.refactor(&values).unwrap();
@@ -794,7 +919,7 @@ mod tests {
     fn dense_cholesky_solves_random_small_systems_and_refuses_indefinite_ones() {
         let indefinite = [(0u32, 0u32, 1.0), (1, 1, 1.0), (1, 0, 2.0)];
         for dense_max in [0, usize::MAX] {
-            let r = FixedValueSolver::new_with_dense_max(2, &indefinite, &[], Symmetry::Symmetric, dense_max, OrderingKind::Auto);
+            let r = FixedValueSolver::new_with_dense_max(2, &indefinite, &[], Symmetry::Symmetric, dense_max, OrderingKind::Auto.into());
             assert!(matches!(r, Err(SolveError::NotPositiveDefinite)), "{dense_max}");
         }
         let mut seed = 12345u64;
@@ -816,11 +941,70 @@ mod tests {
             let fixed: Vec<u32> = (0..n as u32).filter(|_| rand() < 0.2).collect();
             let fv = vec![fixed.iter().map(|_| rand()).collect::<Vec<f64>>()];
             let b = vec![(0..n).map(|_| rand()).collect::<Vec<f64>>()];
-            let dense = FixedValueSolver::new_with_dense_max(n, &t, &fixed, Symmetry::Symmetric, usize::MAX, OrderingKind::Auto).unwrap();
-            let sparse = FixedValueSolver::new_with_dense_max(n, &t, &fixed, Symmetry::Symmetric, 0, OrderingKind::Auto).unwrap();
+            let dense = FixedValueSolver::new_with_dense_max(n, &t, &fixed, Symmetry::Symmetric, usize::MAX, OrderingKind::Auto.into()).unwrap();
+            let sparse = FixedValueSolver::new_with_dense_max(n, &t, &fixed, Symmetry::Symmetric, 0, OrderingKind::Auto.into()).unwrap();
             let (xd, xs) = (dense.solve(&fv, &b).unwrap(), sparse.solve(&fv, &b).unwrap());
             for i in 0..n {
                 assert!((xd[0][i] - xs[0][i]).abs() < 1e-11 * (1.0 + xs[0][i].abs()), "n {n}, {i}: {} vs {}", xd[0][i], xs[0][i]);
+            }
+        }
+    }
+
+    /// `solve_inexact` on a grid Laplacian with a shift: with a single-precision factor (a
+    /// system refactored every iteration, large enough for mixed precision) the residual is
+    /// at most the asked fraction of the guess's, and the answer is near the direct solve's
+    /// (within what that fraction allows); with a double-precision factor (small system) it
+    /// is the direct solve itself.
+    #[test]
+    fn inexact_solves_reach_the_asked_residual() {
+        for (k, single) in [(140usize, true), (40, false)] {
+            let n = k * k;
+            let id = |i: usize, j: usize| (j * k + i) as u32;
+            let mut t: Vec<(u32, u32, f64)> = (0..n as u32).map(|v| (v, v, 1e-3 * (1.0 + (v % 7) as f64))).collect();
+            for j in 0..k {
+                for i in 0..k {
+                    let w = 1.0 + 0.5 * ((i * 3 + j) % 5) as f64;
+                    for (a, b) in [(id(i, j), (i + 1 < k).then(|| id(i + 1, j))), (id(i, j), (j + 1 < k).then(|| id(i, j + 1)))] {
+                        if let Some(b) = b {
+                            t.extend([(a, a, w), (b, b, w), (a.max(b), a.min(b), -w)]);
+                        }
+                    }
+                }
+            }
+            let fixed = [id(0, 0), id(k - 1, k / 2)];
+            let fv = vec![0.5, -2.0];
+            let b: Vec<f64> = (0..n).map(|i| ((i as f64) * 0.013).sin()).collect();
+            let s = FixedValueSolver::new(n, &t, &fixed, Symmetry::Symmetric).unwrap();
+            let precision = match &s.symbolic {
+                Symbolic::Llt { state, .. } => state.lock().unwrap().factor.precision(),
+                _ => None,
+            };
+            assert_eq!(precision, Some(if single { refined_llt::Precision::Single } else { refined_llt::Precision::Double }), "k {k}");
+            let direct = s.solve(&[fv.clone()], &[b.clone()]).unwrap().pop().unwrap();
+            let guess: Vec<f64> = direct.iter().enumerate().map(|(i, v)| v + 0.3 * ((i as f64) * 0.7).cos()).collect();
+            // Residual of the free rows at x: b_F − (Q x)_F.
+            let residual = |x: &[f64]| -> f64 {
+                let mut r = b.clone();
+                for &(i, j, v) in &t {
+                    r[i as usize] -= v * x[j as usize];
+                    if i != j {
+                        r[j as usize] -= v * x[i as usize];
+                    }
+                }
+                fixed.iter().for_each(|&c| r[c as usize] = 0.0);
+                r.iter().map(|v| v * v).sum::<f64>().sqrt()
+            };
+            let (r_guess, r_direct) = (residual(&guess), residual(&direct));
+            for relative in [1e-2, 1e-4] {
+                let x = s.solve_inexact(&fv, &b, &guess, relative).unwrap();
+                assert_eq!((x[fixed[0] as usize], x[fixed[1] as usize]), (fv[0], fv[1]));
+                let r = residual(&x);
+                if single {
+                    assert!(r <= relative * r_guess * (1.0 + 1e-9), "k {k}: residual {r} for {relative} of {r_guess}");
+                    assert!(r > r_direct, "k {k}: the inexact solve is not the direct one ({r} vs {r_direct})");
+                } else {
+                    assert_eq!(x, direct, "k {k}: a double-precision factor solves directly");
+                }
             }
         }
     }

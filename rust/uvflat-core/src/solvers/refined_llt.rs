@@ -212,6 +212,75 @@ impl<T: Scalar> RefinedLlt<T> {
         Ok(())
     }
 
+    /// `out = (L Lᴴ)⁻¹ r` with the current factor, in its precision, without refinement: the
+    /// preconditioner of [`RefinedLlt::solve_inexact`]. Failures:
+    /// [`SolveError::NotPositiveDefinite`] before any successful factorization.
+    fn precondition<I: Index>(&self, symbolic: &SymbolicCholesky<I>, r: &[T], out: &mut [T], par: Par, stack: &mut MemStack) -> Result<(), SolveError> {
+        let n = r.len();
+        match self.precision {
+            None => Err(SolveError::NotPositiveDefinite),
+            Some(Precision::Double) => {
+                out.copy_from_slice(r);
+                LltRef::new(symbolic, &self.double).solve_in_place_with_conj(faer::Conj::No, MatMut::from_column_major_slice_mut(out, n, 1), par, stack);
+                Ok(())
+            }
+            Some(Precision::Single) => {
+                let r_norm = r.iter().fold(0.0f64, |m, v| m.max(v.magnitude()));
+                if r_norm == 0.0 || !r_norm.is_finite() {
+                    out.copy_from_slice(r);
+                    return Ok(());
+                }
+                let mut d: Vec<T::Low> = r.iter().map(|v| v.scale(1.0 / r_norm).to_low().unwrap_or(T::low_zero())).collect();
+                LltRef::new(symbolic, &self.single).solve_in_place_with_conj(faer::Conj::No, MatMut::from_column_major_slice_mut(&mut d, n, 1), par, stack);
+                let back = r_norm / self.scale;
+                for (o, di) in out.iter_mut().zip(d) {
+                    *o = T::from_low(di).scale(back);
+                }
+                Ok(())
+            }
+        }
+    }
+
+    /// Solve `A x = b` to the accuracy of an inexact Newton step, from the guess in `x`:
+    /// with a single-precision factor, conjugate gradients preconditioned by it
+    /// ([`super::conjugate_gradient`]) until the residual is `relative` times its value at
+    /// the guess, in at most [`MAX_STEPS`] steps; with a double-precision one, directly.
+    /// Returns whether `x` holds such a solution; when not (no convergence, a breakdown, a
+    /// non-finite value), [`RefinedLlt::solve_in_place`] is the way to the answer.
+    #[allow(clippy::too_many_arguments)]
+    pub fn solve_inexact<I: Index>(&self, symbolic: &SymbolicCholesky<I>, a: SparseColMatRef<'_, I, T>, b: &[T], x: &mut [T], relative: f64, par: Par, stack: &mut MemStack) -> Result<bool, SolveError> {
+        match self.precision {
+            None => Err(SolveError::NotPositiveDefinite),
+            Some(Precision::Double) => {
+                self.precondition(symbolic, b, x, par, stack)?;
+                Ok(x.iter().all(|v| v.finite()))
+            }
+            Some(Precision::Single) => {
+                let mut failed = None;
+                let outcome = super::conjugate_gradient::solve(
+                    b,
+                    x,
+                    relative,
+                    MAX_STEPS,
+                    |v, out| {
+                        out.iter_mut().for_each(|o| *o = T::zero_value());
+                        sub_hermitian_product(a, v, out);
+                        out.iter_mut().for_each(|o| *o = T::zero_value() - *o);
+                    },
+                    |r, out| {
+                        if let Err(e) = self.precondition(symbolic, r, out, par, stack) {
+                            failed = Some(e);
+                        }
+                    },
+                );
+                if let Some(e) = failed {
+                    return Err(e);
+                }
+                Ok(matches!(outcome, super::conjugate_gradient::Cg::Converged(_)) && x.iter().all(|v| v.finite()))
+            }
+        }
+    }
+
     /// Iterative refinement of one right-hand side; `None` when it stops converging.
     fn refine<I: Index>(&mut self, symbolic: &SymbolicCholesky<I>, a: SparseColMatRef<'_, I, T>, a_norm: f64, b: &[T], par: Par, stack: &mut MemStack) -> Option<Vec<T>> {
         let n = b.len();
@@ -410,28 +479,12 @@ mod tests {
 
     /// The iterative methods give the same maps with their large systems factored in single
     /// precision as in double (a bumpy 100 × 100 grid: 20,000 SLIM / MIPS unknowns, 19,208
-    /// ABF++ reduced rows, both above [`MIXED_MIN`]).
+    /// ABF++ reduced rows, both above [`MIXED_MIN`]); SLIM and MIPS, whose Newton steps are
+    /// solved inexactly in single precision, nearly the same maps at no higher energy.
     #[test]
     fn iterative_methods_give_the_same_maps_in_mixed_precision() {
         use crate::methods::{abf, mips, scaffold, slim};
-        let k = 100u32;
-        let mut positions = Vec::new();
-        for j in 0..k {
-            for i in 0..k {
-                let (x, y) = (i as f64 / (k - 1) as f64, j as f64 / (k - 1) as f64);
-                positions.push([x, y, 0.3 * (x * x - y * y) + 0.05 * (9.0 * x).sin() * (7.0 * y).cos()]);
-            }
-        }
-        let mut corners = Vec::new();
-        for j in 0..k - 1 {
-            for i in 0..k - 1 {
-                let v = j * k + i;
-                corners.extend([v, v + 1, v + k + 1, v, v + k + 1, v + k]);
-            }
-        }
-        let sizes = vec![3u32; corners.len() / 3];
-        let mesh = crate::mesh::PolyMesh::new(&positions, &corners, &sizes).unwrap();
-        let chart = crate::charts::build_charts(&mesh, &[], None).remove(0);
+        let chart = crate::charts::bumpy_grid_chart(100);
         assert!(2 * chart.positions.len() >= MIXED_MIN);
         type Run<'a> = Box<dyn Fn() -> Vec<[f64; 2]> + 'a>;
         let runs: Vec<(&str, Run)> = vec![
@@ -452,7 +505,21 @@ mod tests {
             assert_eq!(SINGLE_FACTORIZATIONS.with(|c| c.get()), 0, "{name}: forced double precision");
             let extent = double.iter().fold(0.0f64, |m, p| m.max(p[0].abs()).max(p[1].abs()));
             let diff = mixed.iter().zip(&double).fold(0.0f64, |m, (a, b)| m.max((a[0] - b[0]).abs()).max((a[1] - b[1]).abs()));
-            assert!(diff <= 1e-7 * extent, "{name}: maps differ by {diff:.3e} of {extent:.3e}");
+            // SLIM and MIPS solve Newton steps inexactly (`slim::INEXACT`): their
+            // maps agree less closely, and their energies must not be higher.
+            let inexact = matches!(name, "slim" | "mips");
+            let bound = if inexact { 1e-4 } else { 1e-7 };
+            assert!(diff <= bound * extent, "{name}: maps differ by {diff:.3e} of {extent:.3e}");
+            if inexact {
+                let ops = crate::methods::nonlinear::TriangleOperators::new(&chart.positions, &chart.triangles);
+                let energy = |uv: &[[f64; 2]]| {
+                    let e = crate::methods::nonlinear::energy::symmetric_dirichlet;
+                    let m = crate::methods::nonlinear::energy::mips_energy;
+                    if name == "mips" { m(&ops, &chart.triangles, uv) } else { e(&ops, &chart.triangles, uv) }
+                };
+                let (em, ed) = (energy(&mixed), energy(&double));
+                assert!(em <= ed * (1.0 + 1e-6), "{name}: energy {em} mixed against {ed} double");
+            }
         }
     }
 

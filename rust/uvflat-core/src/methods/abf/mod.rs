@@ -373,6 +373,10 @@ fn solve_filled(chart: &Chart, options: &AbfOptions, prescribed: &[(u32, f64)]) 
     drop(beta_sums);
     let mut p = Problem::new(tris, beta, &interior, &sum_target, &ineq);
     drop((interior, sum_target));
+    // The reduced system and the LSCM reconstruction share one vertex order.
+    if let crate::solvers::ordering::Ordering::Vertices { order, .. } = chart.ordering(crate::solvers::ordering::OrderingKind::Auto) {
+        p.vertex_order = Some(order);
+    }
     let mut z_lo = Vec::new();
     if p.has_ineq {
         let beta_min = p.beta.iter().copied().fold(f64::INFINITY, f64::min);

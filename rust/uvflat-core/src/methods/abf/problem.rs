@@ -101,6 +101,9 @@ pub(super) struct Problem<'a> {
     pub(super) has_ineq: bool,
     /// Lower bound of every angle (interior-point iteration), or 0 for none.
     pub(super) lower: f64,
+    /// The chart's shared vertex elimination order ([`crate::charts::Chart::vertex_order`]),
+    /// from which the reduced system's ordering is taken when it would be AMD.
+    pub(super) vertex_order: Option<&'a [u32]>,
 }
 
 impl<'a> Problem<'a> {
@@ -128,7 +131,7 @@ impl<'a> Problem<'a> {
         let m = rows.len();
         let (col_ptr, row_idx, slots, slot_start) = reduced_pattern(m, tris.len(), |f| face_rows_of(&tris[f], &sum_row, &wheel_row));
         let has_ineq = rows.iter().any(|r| r.ineq);
-        Problem { tris, beta, rows, target, sum_row, wheel_row, col_ptr, row_idx, slots, slot_start, has_ineq, lower: 0.0 }
+        Problem { tris, beta, rows, target, sum_row, wheel_row, col_ptr, row_idx, slots, slot_start, has_ineq, lower: 0.0, vertex_order: None }
     }
 
     /// The constraint rows touching triangle `f`.

@@ -162,7 +162,8 @@ impl Reduced {
 
 /// A fill-reducing ordering of the reduced matrix: approximate minimum degree (nested
 /// dissection for large charts) on the graph of the constrained vertices (half the size of
-/// the matrix), each vertex's rows kept together.
+/// the matrix), each vertex's rows kept together. The AMD order is the chart's shared vertex
+/// order restricted to these vertices when the problem has one ([`Problem::vertex_order`]).
 pub(super) fn vertex_ordering(p: &Problem<'_>) -> Result<crate::solvers::ordering::Permutation, faer::sparse::FaerError> {
     let m = p.m();
     // Group of every row: the rows of one vertex are consecutive.
@@ -176,25 +177,41 @@ pub(super) fn vertex_ordering(p: &Problem<'_>) -> Result<crate::solvers::orderin
     }
     let g = start.len();
     start.push(m);
-    // Group graph, upper triangle by columns.
-    let mut col_ptr = vec![0usize; g + 1];
-    let mut row_idx = Vec::new();
-    let mut mark = vec![usize::MAX; g];
-    for gc in 0..g {
-        for c in start[gc]..start[gc + 1] {
-            for &r in &p.row_idx[p.col_ptr[c] as usize..p.col_ptr[c + 1] as usize] {
-                let gr = group[r as usize];
-                if mark[gr] != gc {
-                    mark[gr] = gc;
-                    row_idx.push(gr);
-                }
-            }
+    // AMD, or nested dissection for large charts (see `solvers::ordering`); AMD taken from the
+    // chart's shared vertex order when there is one.
+    use crate::solvers::ordering::OrderingKind;
+    let shared = p.vertex_order.filter(|_| OrderingKind::Auto.resolve(g) == OrderingKind::Amd).and_then(|order| {
+        let mut group_of = vec![u32::MAX; order.len()];
+        for gv in 0..g {
+            let v = p.rows[start[gv]].vertex as usize;
+            *group_of.get_mut(v)? = gv as u32;
         }
-        row_idx[col_ptr[gc]..].sort_unstable();
-        col_ptr[gc + 1] = row_idx.len();
-    }
-    // AMD, or nested dissection for large charts (see `solvers::ordering`).
-    let gfwd = crate::solvers::ordering::fill_reducing(crate::solvers::ordering::OrderingKind::Auto, g, &col_ptr, &row_idx)?.fwd;
+        let gfwd: Vec<usize> = order.iter().filter_map(|&v| group_of.get(v as usize).filter(|&&gv| gv != u32::MAX).map(|&gv| gv as usize)).collect();
+        (gfwd.len() == g).then_some(gfwd)
+    });
+    let gfwd = match shared {
+        Some(gfwd) => gfwd,
+        None => {
+            // Group graph, upper triangle by columns.
+            let mut col_ptr = vec![0usize; g + 1];
+            let mut row_idx = Vec::new();
+            let mut mark = vec![usize::MAX; g];
+            for gc in 0..g {
+                for c in start[gc]..start[gc + 1] {
+                    for &r in &p.row_idx[p.col_ptr[c] as usize..p.col_ptr[c + 1] as usize] {
+                        let gr = group[r as usize];
+                        if mark[gr] != gc {
+                            mark[gr] = gc;
+                            row_idx.push(gr);
+                        }
+                    }
+                }
+                row_idx[col_ptr[gc]..].sort_unstable();
+                col_ptr[gc + 1] = row_idx.len();
+            }
+            crate::solvers::ordering::fill_reducing(OrderingKind::Auto, g, &col_ptr, &row_idx)?.fwd
+        }
+    };
     let mut fwd = Vec::with_capacity(m);
     for &gv in &gfwd {
         fwd.extend(start[gv]..start[gv + 1]);

@@ -19,6 +19,7 @@
 
 use rayon::prelude::*;
 
+use crate::solvers::ordering::Ordering;
 use crate::solvers::{FixedValueSolver, Symmetry};
 
 /// The `(p, q)`, `p ≥ q`, entries of a triangle's 6 × 6 block, row by row.
@@ -74,8 +75,8 @@ pub fn block_triplets(tris: &[[u32; 3]], unknown: fn(&[u32; 3], usize) -> u32) -
 pub const ANALYSE_BESIDE_START: std::ops::Range<usize> = 2_000..super::start::SEQUENTIAL_STARTS_FROM;
 
 /// `start()` and, for a chart whose triangle count is in [`ANALYSE_BESIDE_START`], beside it
-/// the analysis ([`FixedValueSolver::analyse`]) of the symmetric 2n-unknown block system over
-/// `tris` with the unknowns `fixed` held, numbered by `unknown`. The analysis runs on the
+/// the analysis ([`FixedValueSolver::analyse_with`], with `ordering`) of the symmetric
+/// 2n-unknown block system over `tris` with the unknowns `fixed` held, numbered by `unknown`. The analysis runs on the
 /// calling thread, also outside rayon's pool (so that it sees this thread's settings), and
 /// `start` on whichever thread of the pool is free. `None` for other charts, and when the
 /// analysis fails (the method then analyses as usual and meets the failure itself).
@@ -84,6 +85,7 @@ pub fn analysed_beside<S: Send>(
     tris: &[[u32; 3]],
     unknown: fn(&[u32; 3], usize) -> u32,
     fixed: &[u32],
+    ordering: Ordering<'_>,
     start: impl FnOnce() -> S + Send,
 ) -> (S, Option<FixedValueSolver>) {
     if !ANALYSE_BESIDE_START.contains(&tris.len()) {
@@ -92,7 +94,7 @@ pub fn analysed_beside<S: Send>(
     let mut started = None;
     let analysed = rayon::in_place_scope(|scope| {
         scope.spawn(|_| started = Some(start()));
-        FixedValueSolver::analyse(n_unknowns, &block_triplets(tris, unknown), fixed, Symmetry::Symmetric).ok()
+        FixedValueSolver::analyse_with(n_unknowns, &block_triplets(tris, unknown), fixed, Symmetry::Symmetric, ordering).ok()
     });
     (started.expect("the scope ran the start"), analysed)
 }
