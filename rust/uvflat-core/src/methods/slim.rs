@@ -74,12 +74,12 @@ use super::nonlinear::pattern::{analysed_beside, block_triplets, interleaved, BL
 use super::nonlinear::pins::{anchor_vertices, anchors, translate_onto_first_pin};
 use super::nonlinear::proxy::reweight;
 use super::nonlinear::start;
-use crate::solvers::ordering::OrderingKind;
 use super::nonlinear::unfold::unfold;
 use super::nonlinear::TriangleOperators;
 use super::{lscm, ChartFailure, ChartSolution, Fallback};
 use crate::charts::Chart;
 use crate::solvers::line_search::{all_positive, flip_free_line_search, LineSearchOptions};
+use crate::solvers::ordering::OrderingKind;
 use crate::solvers::{FixedValueSolver, Symmetry};
 
 pub use super::nonlinear::energy::symmetric_dirichlet;
@@ -295,8 +295,6 @@ fn seconds(a: Option<Instant>, b: Option<Instant>) -> f64 {
     }
 }
 
-/// [`solve_with_history`]; `timed` says whether the history's seconds are measured (they are
-/// 0 otherwise; the energies and steps are the same).
 /// Accuracy of the projected Newton steps' solves (SLIM's and MIPS's): the residual of the
 /// step's linear system at most this fraction of its value at the zero step, the energy's
 /// gradient, as in inexact Newton methods (Dembo, Eisenstat, Steihaug, "Inexact Newton
@@ -306,6 +304,8 @@ fn seconds(a: Option<Instant>, b: Option<Instant>) -> f64 {
 /// iteration's energy is the same to six digits. SLIM's proxy steps are solved accurately.
 pub(crate) const INEXACT: f64 = 1e-3;
 
+/// [`solve_with_history`]; `timed` says whether the history's seconds are measured (they are
+/// 0 otherwise; the energies and steps are the same).
 fn solve_timed(chart: &Chart, pins: &[(u32, [f64; 2])], options: &SlimOptions, timed: bool) -> Result<(ChartSolution, SlimHistory), ChartFailure> {
     let clock = Clock(timed);
     let n = chart.positions.len();
@@ -459,8 +459,9 @@ fn solve_timed(chart: &Chart, pins: &[(u32, [f64; 2])], options: &SlimOptions, t
         };
         let t2 = clock.now();
         // A failed global step (extreme weights) ends the iteration; the current map is valid.
-        // The proxy step is solved accurately: an inexact one (below) made the first step's
-        // flip-free bound three times shorter on camelhead split once, and took an iteration more.
+        // The proxy step is solved accurately: solved like the Newton steps (to `INEXACT`), the
+        // first step's flip-free bound was three times shorter on camelhead split once, and
+        // the iteration took one step more.
         let x = match factored.and_then(|()| solver.as_ref().expect("factored above").solve(&[fixed_vals.clone()], &[b])) {
             Ok(mut x) => x.pop().unwrap_or_default(),
             Err(e) => {
