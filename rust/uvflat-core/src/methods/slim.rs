@@ -315,8 +315,11 @@ fn solve_timed(chart: &Chart, pins: &[(u32, [f64; 2])], options: &SlimOptions, t
     // barrier of a start that leaves no quad out (the usual case; see below).
     let fixed_ids: Vec<u32> = anchor_vertices(pins).iter().flat_map(|&v| [2 * v, 2 * v + 1]).collect();
     let all_splits = if chart.quads.is_empty() { None } else { Some(chart.triangles_both_splits().0) };
-    // One elimination order of the chart's vertices serves the LSCM start and the global step.
-    let ordering = chart.ordering(OrderingKind::Auto);
+    // One elimination order of the chart's vertices serves the LSCM start and the global step
+    // (not computed when neither would use it: a mean value start and a system large enough
+    // for nested dissection).
+    let shared = options.start == SlimStart::Auto || OrderingKind::Auto.resolve(2 * n) == OrderingKind::Amd;
+    let ordering = if shared { chart.ordering(OrderingKind::Auto) } else { OrderingKind::Auto.into() };
     let ((start, rejected), mut analysed) =
         analysed_beside(2 * n, all_splits.as_deref().unwrap_or(&chart.triangles), interleaved, &fixed_ids, ordering, || pick_start(chart, pins, &ops, options));
     drop(all_splits);

@@ -765,17 +765,9 @@ impl<T: Scalar> FixedValueSolver<T> {
         let nf = self.free.len();
         let mut rhs = Mat::<T>::from_fn(nf, k, |_, _| T::zero_value());
         for col in 0..k {
-            if let Some(bc) = b.get(col) {
-                if !bc.is_empty() {
-                    for (i, &g) in self.free.iter().enumerate() {
-                        rhs[(i, col)] = bc[g as usize];
-                    }
-                }
-            }
-            let xc = &fixed_values[col];
-            for &(r, c, v) in &self.coupling {
-                let prod = v * xc[c as usize];
-                rhs[(r as usize, col)] -= prod;
+            let column = self.free_rhs(&fixed_values[col], b.get(col).map_or(&[][..], |v| &v[..]));
+            for (i, v) in column.into_iter().enumerate() {
+                rhs[(i, col)] = v;
             }
         }
         match (&self.factor, &self.symbolic) {
@@ -797,18 +789,11 @@ impl<T: Scalar> FixedValueSolver<T> {
         }
         let mut out = Vec::with_capacity(k);
         for col in 0..k {
-            let mut x = vec![T::zero_value(); self.n];
-            for (i, &g) in self.free.iter().enumerate() {
-                let v = rhs[(i, col)];
-                if !v.finite() {
-                    return Err(SolveError::NonFinite);
-                }
-                x[g as usize] = v;
+            let y: Vec<T> = (0..nf).map(|i| rhs[(i, col)]).collect();
+            if !y.iter().all(|v| v.finite()) {
+                return Err(SolveError::NonFinite);
             }
-            for (j, &c) in self.fixed.iter().enumerate() {
-                x[c as usize] = fixed_values[col][j];
-            }
-            out.push(x);
+            out.push(self.full(&y, &fixed_values[col]));
         }
         Ok(out)
     }
