@@ -29,8 +29,9 @@ fn main() {
     println!("{} charts, {} new seams, {:.3} s", r.charts.len(), r.new_seams.len(), t.elapsed().as_secs_f64());
     for c in &r.charts {
         println!(
-            "chart {:>3} {:>6} faces {:?} {:>8} cones {} cut {:.3} flips {} overlap {} conf {:.3} area {:.3} {:?}",
-            c.id, c.faces, c.kind, c.status.name(), c.cones, c.cut_length, c.flips, c.overlap, c.distortion.conformal, c.distortion.area, c.reason
+            "chart {:>3} {:>6} faces {:?} {:>8} cones {} cut {:.3} flips {} overlap {} conf {:.3} area {:.3} outside {:.3} {:.2}s {:?}",
+            c.id, c.faces, c.kind, c.status.name(), c.cones, c.cut_length, c.flips, c.overlap, c.distortion.conformal, c.distortion.area,
+            c.density.outside, c.seconds, c.reason
         );
     }
 }

@@ -26,6 +26,7 @@ pub mod metrics;
 pub mod progress;
 pub mod solvers;
 mod schedule;
+pub mod pipeline;
 mod unwrap;
 pub mod validate;
 
@@ -36,4 +37,4 @@ pub use methods::{method_names, BoundaryShape, Method, OptionValue, SpectralOpti
 pub use metrics::{Distortion, MeshMetrics};
 pub use progress::Progress;
 pub use validate::validate_input;
-pub use unwrap::{unwrap, ChartKind, ChartReport, ChartStatus, Fit, MeshInput, UnwrapOptions, Unwrapped};
+pub use unwrap::{plan_seams, unwrap, ChartKind, ChartReport, ChartStatus, Fit, MeshInput, Problem, UnwrapOptions, Unwrapped};

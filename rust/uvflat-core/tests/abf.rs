@@ -10,7 +10,7 @@ use uvflat_core::charts::{build_charts, Chart};
 use uvflat_core::methods::abf::{self, AbfBoundary, AbfOptions, AbfSolver};
 use uvflat_core::methods::{chart_angles, lscm};
 use uvflat_core::mesh::PolyMesh;
-use uvflat_core::{unwrap, ChartKind, ChartStatus, Method, OptionValue, UnwrapOptions};
+use uvflat_core::{unwrap, AutoSeamOptions, ChartKind, ChartStatus, Method, OptionValue, UnwrapOptions};
 
 fn charts_of(s: &Soup, seams: &[[u32; 2]]) -> Vec<Chart> {
     let mesh = PolyMesh::new(&s.positions, &s.corner_verts, &s.face_sizes).unwrap();
@@ -177,7 +177,7 @@ fn no_flips_on_the_disk_meshes_free() {
     let Some(dir) = shared_meshes() else { return };
     for f in ["camelhead.off", "lion.off", "alligator.obj", "beetle.off", "halftunnel.off"] {
         let s = load(&dir.join(f));
-        let r = unwrap(&s.input(), &UnwrapOptions { method: abf_method(AbfBoundary::Free), ..Default::default() }).unwrap();
+        let r = unwrap(&s.input(), &UnwrapOptions { method: abf_method(AbfBoundary::Free), auto_seams: AutoSeamOptions { enabled: false, ..Default::default() }, ..Default::default() }).unwrap();
         assert_eq!(r.charts.len(), 1, "{f}");
         let c = &r.charts[0];
         assert_eq!(c.status, ChartStatus::Solved, "{f}: {:?}", c.reason);
@@ -201,7 +201,7 @@ fn convex_boundary_is_bijective_on_every_disk_mesh() {
         let s = load(&dir.join(f));
         let opts = AbfOptions { boundary: AbfBoundary::Convex, tolerance: 1e-9, ..Default::default() };
         let t = std::time::Instant::now();
-        let r = unwrap(&s.input(), &UnwrapOptions { method: Method::Abf(opts.clone()), ..Default::default() }).unwrap();
+        let r = unwrap(&s.input(), &UnwrapOptions { method: Method::Abf(opts.clone()), auto_seams: AutoSeamOptions { enabled: false, ..Default::default() }, ..Default::default() }).unwrap();
         let secs = t.elapsed().as_secs_f64();
         assert_eq!(r.charts.len(), 1, "{f}");
         let c = &r.charts[0];
@@ -381,7 +381,7 @@ fn angle_sums_option_through_parse_and_unwrap() {
     let method = Method::parse("abf", &opt(sums.clone())).unwrap();
     let Method::Abf(ref o) = method else { panic!("abf") };
     assert_eq!(o.angle_sums, sums);
-    let r = unwrap(&s.input(), &UnwrapOptions { method, ..Default::default() }).unwrap();
+    let r = unwrap(&s.input(), &UnwrapOptions { method, auto_seams: AutoSeamOptions { enabled: false, ..Default::default() }, ..Default::default() }).unwrap();
     let c = &r.charts[0];
     assert_eq!(c.status, ChartStatus::Solved, "{:?}", c.reason);
     assert_eq!(c.flips, 0);

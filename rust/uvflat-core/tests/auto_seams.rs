@@ -360,13 +360,21 @@ fn shared_closed(methods: &[Method]) {
 }
 
 #[test]
-fn meshes_with_holes_are_not_cut() {
+fn meshes_with_holes_are_joined_to_their_outline() {
     let Some(dir) = shared_meshes() else { return };
     for f in ["beetle.off", "halftunnel.off"] {
         let s = load(&dir.join(f));
-        let r = unwrap(&s.input(), &opts(Method::Abf(abf::AbfOptions::default()))).unwrap();
+        let m = Method::Abf(abf::AbfOptions::default());
+        let r = unwrap(&s.input(), &opts(m.clone())).unwrap();
+        // Every island a disk: the holes are joined to the outline by new seams.
+        assert!(!r.new_seams.is_empty(), "{f}");
+        assert!(r.charts.iter().all(|c| c.kind == ChartKind::Disk && c.status == ChartStatus::Solved), "{f}: {:?}", r.charts);
+        check(f, &m, &r);
+        // Automatic seams off: nothing is cut, the holes stay.
+        let mut o = opts(m.clone());
+        o.auto_seams.enabled = false;
+        let r = unwrap(&s.input(), &o).unwrap();
         assert!(r.new_seams.is_empty(), "{f}");
-        assert!(r.charts.iter().all(|c| c.cones == 0 && c.status != ChartStatus::Failed), "{f}");
-        check(f, &Method::Abf(abf::AbfOptions::default()), &r);
+        assert!(r.charts.iter().any(|c| c.kind == ChartKind::DiskWithHoles), "{f}");
     }
 }

@@ -309,7 +309,10 @@ fn scaffold_on_a_chart_with_many_holes_converges_or_honestly_falls_back() {
     let mut input = s.input();
     input.selected = Some(&selected);
     let m = Method::Scaffold(ScaffoldOptions { max_iterations: 30, ..Default::default() });
-    let r = unwrap(&input, &opts(m.clone())).unwrap();
+    // The chart with its holes, uncut (automatic seams would join the holes to the outline).
+    let mut o = opts(m.clone());
+    o.auto_seams.enabled = false;
+    let r = unwrap(&input, &o).unwrap();
     assert_eq!(r.charts.len(), 1);
     let c = &r.charts[0];
     eprintln!("{:?} {} iterations: {:?}", c.status, c.iterations, c.reason);
@@ -320,7 +323,7 @@ fn scaffold_on_a_chart_with_many_holes_converges_or_honestly_falls_back() {
             assert!(!c.reason.as_deref().unwrap_or("").contains("stopped early"), "{:?}", c.reason);
         }
         ChartStatus::Fallback => assert!(c.reason.as_deref().unwrap_or("").contains("symmetric Dirichlet"), "{:?}", c.reason),
-        ChartStatus::Failed => panic!("failed: {:?}", c.reason),
+        other => panic!("{other:?}: {:?}", c.reason),
     }
     assert_eq!(c.flips, 0);
     assert!(!c.overlap);

@@ -3,7 +3,7 @@
 use numpy::{PyArray1, PyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
-use uvflat_core::metrics::{ChartMetrics, MeshMetrics};
+use uvflat_core::metrics::{ChartMetrics, DensitySpread, MeshMetrics};
 use uvflat_core::{ChartReport, Distortion};
 
 fn fmt_f(x: f64) -> String {
@@ -34,7 +34,8 @@ pub struct PyChartReport {
     pub genus: usize,
     /// "disk", "disk_with_holes", "closed" or "higher_genus".
     pub kind: String,
-    /// "solved", "fallback" or "failed".
+    /// "solved", "fallback", "invalid" (UVs written, but the chart breaks its rule:
+    /// `reason_code` says which) or "failed".
     pub status: String,
     /// Why the chart failed or fell back, or a note on pins; None otherwise.
     pub reason: Option<String>,
@@ -60,6 +61,14 @@ pub struct PyChartReport {
     pub cut_length: f64,
     /// Stable code of the outcome beside the prose `reason` (see `ChartReport::reason_code`).
     pub reason_code: String,
+    /// Area-weighted 5th percentile of the texel-density ratio (triangle density over the
+    /// island's; NaN if failed).
+    pub density_p5: f64,
+    /// Area-weighted 95th percentile of the texel-density ratio (NaN if failed).
+    pub density_p95: f64,
+    /// Share of the island's 3D area (0 to 1) whose density ratio is outside
+    /// [1/max_stretch, max_stretch] (NaN if failed).
+    pub density_outside: f64,
 }
 
 impl From<&ChartReport> for PyChartReport {
@@ -86,6 +95,9 @@ impl From<&ChartReport> for PyChartReport {
             cones: r.cones,
             cut_length: r.cut_length,
             reason_code: r.reason_code().to_string(),
+            density_p5: r.density.p5,
+            density_p95: r.density.p95,
+            density_outside: r.density.outside,
         }
     }
 }
@@ -114,6 +126,9 @@ impl PyChartReport {
         d.set_item("seconds", self.seconds)?;
         d.set_item("cones", self.cones)?;
         d.set_item("cut_length", self.cut_length)?;
+        d.set_item("density_p5", self.density_p5)?;
+        d.set_item("density_p95", self.density_p95)?;
+        d.set_item("density_outside", self.density_outside)?;
         Ok(d)
     }
 }
@@ -282,6 +297,13 @@ fn distortion_items(d: &Bound<'_, PyDict>, dist: &Distortion) -> PyResult<()> {
     Ok(())
 }
 
+fn density_items(d: &Bound<'_, PyDict>, s: &DensitySpread) -> PyResult<()> {
+    d.set_item("density_p5", s.p5)?;
+    d.set_item("density_p95", s.p95)?;
+    d.set_item("density_outside", s.outside)?;
+    Ok(())
+}
+
 /// Quality of a given UV map, from `uvflat.metrics`.
 #[pyclass(frozen, module = "uvflat", name = "Metrics")]
 pub struct PyMetrics {
@@ -289,6 +311,7 @@ pub struct PyMetrics {
     flips: usize,
     overlapping_charts: usize,
     distortion: Distortion,
+    density: DensitySpread,
     per_chart: Vec<ChartMetrics>,
     per_face: Vec<[f64; 2]>,
 }
@@ -300,6 +323,7 @@ impl From<MeshMetrics> for PyMetrics {
             flips: m.flips,
             overlapping_charts: m.overlapping_charts,
             distortion: m.distortion,
+            density: m.density,
             per_chart: m.per_chart,
             per_face: m.per_face,
         }
@@ -313,6 +337,7 @@ fn chart_metrics_dict<'py>(py: Python<'py>, c: &ChartMetrics) -> PyResult<Bound<
     d.set_item("overlap", c.overlap)?;
     distortion_items(&d, &c.distortion)?;
     d.set_item("area_3d", c.area_3d)?;
+    density_items(&d, &c.density)?;
     Ok(d)
 }
 
@@ -348,7 +373,25 @@ impl PyMetrics {
     fn symmetric_dirichlet(&self) -> f64 {
         self.distortion.symmetric_dirichlet
     }
-    /// One dict per chart: faces, flips, overlap, conformal, area, symmetric_dirichlet, area_3d.
+    /// Share of the 3D area (0 to 1) whose texel density is outside [1/2, 2] of its own
+    /// island's (per triangle: (UV area / 3D area) over the island's UV area / 3D area).
+    #[getter]
+    fn density_outside(&self) -> f64 {
+        self.density.outside
+    }
+    /// Area-weighted 5th percentile of the texel-density ratio (each triangle against its
+    /// island).
+    #[getter]
+    fn density_p5(&self) -> f64 {
+        self.density.p5
+    }
+    /// Area-weighted 95th percentile of the texel-density ratio.
+    #[getter]
+    fn density_p95(&self) -> f64 {
+        self.density.p95
+    }
+    /// One dict per chart: faces, flips, overlap, conformal, area, symmetric_dirichlet, area_3d,
+    /// density_p5, density_p95, density_outside.
     #[getter]
     fn per_chart<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
         let items = self.per_chart.iter().map(|c| chart_metrics_dict(py, c)).collect::<PyResult<Vec<_>>>()?;
@@ -373,6 +416,7 @@ impl PyMetrics {
         d.set_item("flips", self.flips)?;
         d.set_item("overlapping_charts", self.overlapping_charts)?;
         distortion_items(&d, &self.distortion)?;
+        density_items(&d, &self.density)?;
         d.set_item("per_chart", self.per_chart(py)?)?;
         d.set_item("face_conformal", self.face_conformal(py))?;
         d.set_item("face_area", self.face_area(py))?;

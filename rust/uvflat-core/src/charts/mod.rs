@@ -19,7 +19,31 @@ pub use triangulate::{triangulate_polygon, triangulate_polygon_avoiding, triangu
 use std::collections::{HashMap, HashSet};
 
 use crate::mesh::PolyMesh;
-use crate::unwrap::ChartKind;
+
+/// Topological class of a chart, from its Euler characteristic and boundary loops.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ChartKind {
+    /// One boundary loop, genus 0.
+    Disk,
+    /// Several boundary loops, genus 0.
+    DiskWithHoles,
+    /// No boundary, genus 0 (a sphere).
+    Closed,
+    /// Genus ≥ 1, with or without boundary.
+    HigherGenus,
+}
+
+impl ChartKind {
+    /// Stable lower-case name used by the Python layer.
+    pub fn name(self) -> &'static str {
+        match self {
+            ChartKind::Disk => "disk",
+            ChartKind::DiskWithHoles => "disk_with_holes",
+            ChartKind::Closed => "closed",
+            ChartKind::HigherGenus => "higher_genus",
+        }
+    }
+}
 
 /// One chart: a connected, triangulated piece of the selection with its own vertices.
 #[derive(Debug, Clone)]
@@ -42,6 +66,10 @@ pub struct Chart {
     /// of its two corner angles is at least π, so convexity is impossible): they count as
     /// their own two triangles, like n-gons.
     pub quads: Vec<Quad>,
+    /// Render triangles (the given triangulation) of the n-gons of five or more corners that
+    /// keep the core's own split because a render diagonal is already an edge of the chart:
+    /// not solved on, but measured, so a fold on what Blender shows is counted as a flip.
+    pub shown: Vec<[u32; 3]>,
     /// Faces of four or more corners as polygons (quads included, with the same exception):
     /// the polygon graph of the barycentric methods, on which faces come out convex.
     pub polygons: Vec<Polygon>,
@@ -407,6 +435,7 @@ fn make_chart(
     let mut triangle_face = Vec::with_capacity(n_chart_triangles);
     let mut quads = Vec::new();
     let mut polygons = Vec::new();
+    let mut shown: Vec<[u32; 3]> = Vec::new();
     // Boundary half-edges (chart vertex a → b): polygon edges not joined to another face.
     let mut boundary_edges: Vec<(u32, u32)> = Vec::new();
     // First pass: chart vertices of every corner, and the chart's polygon edges.
@@ -478,6 +507,9 @@ fn make_chart(
                     (i + 1) % m != j && (j + 1) % m != i && edges.contains(&ukey(local[i], local[j]))
                 })
             });
+            if taken && m >= 5 {
+                shown.extend(tris.iter().map(|t| [local[t[0]], local[t[1]], local[t[2]]]));
+            }
             (!taken).then_some(tris)
         });
         let tris = given.unwrap_or_else(|| {
@@ -587,6 +619,7 @@ fn make_chart(
         triangles,
         triangle_face,
         quads,
+        shown,
         polygons,
         boundary_loops,
         genus,

@@ -150,15 +150,21 @@ impl ScaleSolver {
     }
 }
 
-/// Where `|u|` is largest among `allowed` vertices (not held); ties to the lower id.
+/// Where the surface is most crushed (`−u` largest) among `allowed` vertices (not held);
+/// ties to the lower id.
+///
+/// Only crushed regions take cones: `u < 0` comes from positive curvature, and a cone there
+/// opens the surface with an angle below 2π. A cone where `u > 0` would carry negative
+/// curvature, an angle above 2π at the tip of its slit, and a free-boundary flattening
+/// overlaps its slit's sides there; such regions are split instead.
 fn peak(u: &[f64], allowed: &[bool], held: &[u32]) -> Option<(u32, f64)> {
     let mut best: Option<(u32, f64)> = None;
     for (v, &x) in u.iter().enumerate() {
         if !allowed[v] || held.contains(&(v as u32)) {
             continue;
         }
-        if best.is_none_or(|b| x.abs() > b.1) {
-            best = Some((v as u32, x.abs()));
+        if best.is_none_or(|b| -x > b.1) {
+            best = Some((v as u32, -x));
         }
     }
     best
@@ -210,7 +216,7 @@ pub fn place_cones(
     // Re-placement pass: move each cone (not the seeds) to the peak of |u| without it, keeping
     // a move only when the overall peak drops. One pass: on bunny, cow, decimated-max and
     // fertility a second pass moved no cone.
-    let max_abs = |u: &[f64]| u.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let max_abs = |u: &[f64]| u.iter().fold(0.0f64, |m, x| m.max(-x));
     let mut best = max_abs(&u);
     for _pass in 0..1 {
         let mut moved = false;

@@ -119,8 +119,8 @@ pub fn join_and_prune(
             .filter_map(|e| {
                 let [a, b] = graph.edges[e];
                 let (la, lb) = (label[a as usize], label[b as usize]);
-                (la != lb && la != u32::MAX && lb != u32::MAX)
-                    .then(|| (dist[a as usize] + cost[e] + dist[b as usize], e))
+                let c = dist[a as usize] + cost[e] + dist[b as usize];
+                (la != lb && la != u32::MAX && lb != u32::MAX && c.is_finite()).then_some((c, e))
             })
             .collect();
         bridges.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));

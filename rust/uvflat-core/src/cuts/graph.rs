@@ -175,7 +175,8 @@ pub fn multi_source_dijkstra(graph: &ChartGraph, cost: &[f64], sources: &[(u32, 
         for &(w, e) in graph.neighbours(v) {
             let nd = d + cost[e as usize];
             let wi = w as usize;
-            if !done[wi] && (nd < dist[wi] || (nd == dist[wi] && label[v as usize] < label[wi])) {
+            // An infinite cost (an edge seams must avoid) is no edge at all.
+            if !done[wi] && nd.is_finite() && (nd < dist[wi] || (nd == dist[wi] && label[v as usize] < label[wi])) {
                 dist[wi] = nd;
                 parent[wi] = e;
                 label[wi] = label[v as usize];

@@ -1,60 +1,55 @@
-//! Automatic seams: cut a closed or higher-genus chart into a disk through a few cone
-//! singularities.
+//! Automatic seams: plan the cuts that open a chart into a disk through a few cone
+//! singularities (the chart pipeline, [`crate::pipeline`], decides which charts are cut and
+//! checks the result).
 //!
 //! Steps (each in its own file):
-//! 1. Triage (here): a chart with a defect, a disk, or a disk with holes is not cut (holes are
-//!    filled virtually by the methods); a closed chart (genus 0, no boundary) or a chart with
-//!    handles (genus ≥ 1) is.
-//! 2. [`cones`]: greedy cone placement on the linearised conformal scale factor until
-//!    `max |u| ≤ ln(max_stretch)` or `max_cones` (a closed genus-0 chart always gets 2).
-//! 3. [`cut_graph`]: 2g handle loops by tree–cotree with short loops; an approximate Steiner
-//!    tree joining loops, cones and boundary loops by shortest edge paths; dangling branches
-//!    pruned.
-//! 4. The caller adds the cut edges to the seams and rebuilds the chart, which is then a disk
-//!    (χ = 1, one boundary loop), and flattens it with the chosen method; [`split`] halves a
-//!    chart that still cannot be flattened validly after repair rounds.
+//! 1. [`cones`]: greedy cone placement on the linearised conformal scale factor (held at 0 on
+//!    the chart's boundary, if any) until `max |u| ≤ ln(max_stretch)` or `max_cones` (a
+//!    closed genus-0 chart always gets 2).
+//! 2. [`cut_graph`]: 2g handle loops by tree–cotree with short loops; an approximate Steiner
+//!    tree joining loops, cones and every boundary loop (so holes are joined to the outline)
+//!    by shortest edge paths; dangling branches pruned.
+//! 3. The caller adds the cut edges to the seams and rebuilds the chart, which is then a disk
+//!    (χ = 1, one boundary loop); [`split`] halves a chart that repair rounds could not make
+//!    valid.
 //!
 //! Edge cost of a cut: 3D length, × [`SHARP_FACTOR`] on edges whose dihedral angle is at least
-//! `sharp_angle`, × [`AVOID_FACTOR`] on edges touching a vertex the user asked to keep free of
-//! seams (such vertices never become cones). Everything is deterministic: ties break by ids.
+//! `sharp_angle`, [`AVOID_COST`] (infinite: never cut) on edges touching a vertex the user
+//! asked to keep free of seams (such vertices never become cones). Everything is deterministic: ties break by ids.
 
 pub mod cones;
 pub mod cut_graph;
 pub mod graph;
 pub mod split;
 
-use crate::charts::Chart;
+use crate::charts::{Chart, ChartKind};
 use crate::error::{Result, UvError};
 use crate::mesh::PolyMesh;
-use crate::unwrap::ChartKind;
 
 pub use graph::ChartGraph;
 
 /// Cost factor of a cut along a sharp edge (cheaper: seams hide along creases).
 pub const SHARP_FACTOR: f64 = 0.2;
-/// Cost factor of a cut along an edge touching an avoided vertex.
-pub const AVOID_FACTOR: f64 = 1.0e4;
+/// Cost of a cut along an edge touching an avoided vertex: none is ever cut (*Avoid Seams*
+/// is a constraint, not a preference). A chart that cannot be opened without one stays
+/// uncut there and is reported as breaking the rule.
+pub const AVOID_COST: f64 = f64::INFINITY;
 /// Most cones a repair round may add to a chart on top of `max_cones`.
 pub const REPAIR_ROUNDS: usize = 3;
 /// Most halvings of one chart when cones cannot make it valid.
 pub const MAX_SPLIT_DEPTH: usize = 4;
 
-/// The area distortion (area-weighted mean of max(J, 1/J), DESIGN.md) above which a cut
-/// chart gets another cone or is split: `(1 + max_stretch) / 2` (1.5 for the default 2×).
-pub fn area_bound(max_stretch: f64) -> f64 {
-    0.5 * (1.0 + max_stretch)
-}
-
 /// Options of automatic seams ([`crate::UnwrapOptions::auto_seams`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct AutoSeamOptions {
-    /// Cut closed and higher-genus charts (default `true`). When `false` such charts fail with
-    /// a "mark seams" reason.
+    /// Hold every chart to the atlas rule ([`crate::pipeline::rule`]) and cut where it breaks
+    /// it (default `true`). When `false` nothing is cut: closed and higher-genus charts fail
+    /// with a "mark seams" reason.
     pub enabled: bool,
-    /// Largest length scale change inside one island before another cone is added:
-    /// cones are added while `max |u| > ln(max_stretch)` (up to `max_cones`), and a flattened
-    /// piece whose area distortion exceeds [`area_bound`] gets another cone or is split
-    /// (default 2.0; must be > 1).
+    /// Max Stretch `s` (default 2.0; must be > 1): at most 5% of an island's 3D area may have
+    /// a texel density outside `[1/s, s]` of the island's own. Cones are planned while the
+    /// predicted `max |u| > ln(s)` (up to `max_cones`); a piece that still breaks the rule
+    /// gets another cone or is split.
     pub max_stretch: f64,
     /// Most cones per chart (default 8; a closed sphere gets at least 2 whatever this says).
     pub max_cones: usize,
@@ -104,10 +99,8 @@ impl AutoSeamOptions {
     }
 }
 
-/// Whether a chart gets automatic cuts: closed or with handles, and no defect.
-///
-/// A disk with holes is cut only when it is a piece of an automatic split (the caller
-/// decides; a user's chart with holes keeps them and the methods fill them virtually).
+/// Whether a chart cannot be flattened without cuts: closed or with handles, and no defect.
+/// (The pipeline also cuts charts with holes and charts that break the atlas rule.)
 pub fn needs_cut(chart: &Chart) -> bool {
     chart.defect.is_none() && matches!(chart.kind, ChartKind::Closed | ChartKind::HigherGenus) && !chart.triangles.is_empty()
 }
@@ -142,7 +135,7 @@ pub fn edge_costs(graph: &ChartGraph, chart: &Chart, options: &AutoSeamOptions, 
                 }
             }
             if avoid[chart.mesh_vertex[a as usize] as usize] || avoid[chart.mesh_vertex[b as usize] as usize] {
-                c *= AVOID_FACTOR;
+                c = AVOID_COST;
             }
             c
         })
@@ -201,6 +194,11 @@ impl<'a> ChartCutter<'a> {
     /// The edge graph of the chart.
     pub fn graph(&self) -> &ChartGraph {
         &self.graph
+    }
+
+    /// Per chart vertex: whether it may become a cone (inside the chart, not avoided).
+    pub fn allowed(&self) -> &[bool] {
+        &self.allowed
     }
 
     /// Cones and cut for this round (arguments as in [`cut_chart`]).

@@ -90,7 +90,7 @@ pub fn filled_chart(chart: &Chart) -> Chart {
     c.positions = ext.positions;
     c.triangles = ext.triangles;
     c.boundary_loops = vec![ext.outer];
-    c.kind = crate::unwrap::ChartKind::Disk;
+    c.kind = crate::charts::ChartKind::Disk;
     c
 }
 

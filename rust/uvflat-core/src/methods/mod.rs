@@ -20,7 +20,7 @@ pub mod tutte;
 
 use crate::charts::Chart;
 use crate::error::{Result, UvError};
-use crate::unwrap::ChartKind;
+use crate::charts::ChartKind;
 
 /// Where a fixed-boundary method puts the outer boundary loop.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -55,7 +55,7 @@ impl Default for SpectralOptions {
 }
 
 /// The parameterization method and its options.
-#[derive(Debug, Clone, PartialEq, Default)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum Method {
     /// Tutte 1963: uniform weights, fixed boundary.
     Tutte { boundary: BoundaryShape },
@@ -63,13 +63,13 @@ pub enum Method {
     Harmonic { boundary: BoundaryShape },
     /// Floater 2003: mean value weights, fixed boundary.
     MeanValue { boundary: BoundaryShape },
-    /// Lévy et al. 2002 / Desbrun et al. 2002: least squares conformal, free boundary. Default.
-    #[default]
+    /// Lévy et al. 2002 / Desbrun et al. 2002: least squares conformal, free boundary.
     Lscm,
     /// Mullen et al. 2008: spectral conformal, free boundary, no pins.
     Spectral(SpectralOptions),
     /// Sheffer & de Sturler 2001 / Sheffer et al. 2005: angle based flattening (ABF++ by
     /// default), UVs by LSCM from the solved angles; falls back to LSCM when it fails.
+    /// Default: the best atlas on closed, open and seamed meshes.
     Abf(abf::AbfOptions),
     /// Liu et al. 2008: as-rigid-as-possible, local/global iterations from LSCM, free
     /// boundary; no injectivity guarantee.
@@ -125,6 +125,13 @@ fn as_count(name: &'static str, v: &OptionValue) -> Result<usize> {
         OptionValue::Bool(b) => Err(opt_err(name, format!("expected a positive integer, got the boolean {b}"))),
         OptionValue::Str(s) => Err(opt_err(name, format!("expected a positive integer, got the string {s:?}"))),
         OptionValue::VertexValues(_) => Err(opt_err(name, "expected a positive integer, got per-vertex values")),
+    }
+}
+
+impl Default for Method {
+    /// [`Method::Abf`] with its default options.
+    fn default() -> Self {
+        Method::Abf(abf::AbfOptions::default())
     }
 }
 

@@ -1,4 +1,4 @@
-//! Quality of a UV map, computed independently of any solver (DESIGN.md definitions).
+//! Quality of a UV map, computed independently of any solver (docs/design.md definitions).
 //!
 //! For each triangle, J is the Jacobian of the map from the triangle (in a local 2D frame of
 //! its plane) to its UV triangle, with singular values σ1 ≥ σ2. Before measuring, each chart's
@@ -14,6 +14,10 @@
 //!   positive 3D area makes them infinite. Triangles with zero 3D area have weight 0 (they are
 //!   still counted as flips when their UV triangle has zero area); a chart with no 3D area at
 //!   all has every triangle counted as a flip and infinite distortion, never NaN.
+
+pub mod density;
+
+pub use density::{density_spread, DensitySpread, DEFAULT_DENSITY_BOUND};
 
 use crate::charts::{build_charts_with, FaceTriangulation, Quad};
 use crate::error::{Result, UvError};
@@ -50,6 +54,8 @@ pub struct ChartMetrics {
     pub distortion: Distortion,
     /// 3D area of the chart (weight of the chart in a whole-mesh average).
     pub area_3d: f64,
+    /// Texel-density spread against `[1/2, 2]` ([`density`]).
+    pub density: DensitySpread,
 }
 
 /// Quality of a whole UV map.
@@ -63,6 +69,10 @@ pub struct MeshMetrics {
     pub overlapping_charts: usize,
     /// Distortion over all measured triangles (each chart area-normalised first).
     pub distortion: Distortion,
+    /// Texel-density spread over all charts, each triangle's ratio taken against its own
+    /// chart ([`density`]): the share outside `[1/2, 2]` is exact from [`aggregate`]; the
+    /// percentiles are exact from [`measure`] and NaN from [`aggregate`] alone.
+    pub density: DensitySpread,
     /// One entry per chart.
     pub per_chart: Vec<ChartMetrics>,
     /// `[conformal, area]` distortion of every input face ([`measure`] only; empty from
@@ -93,7 +103,7 @@ pub fn singular_values_2x2(a: f64, b: f64, c: f64, d: f64) -> (f64, f64, f64) {
 /// (camelhead) and 5e-15 · diag² (alligator with ABF's convex boundary).
 pub const ZERO_AREA_RELATIVE: f64 = 1e-15;
 
-/// The one flip definition (DESIGN.md): triangle `t` is flipped when its signed UV area is at
+/// The one flip definition (docs/design.md): triangle `t` is flipped when its signed UV area is at
 /// most [`ZERO_AREA_RELATIVE`] · diag² in absolute value (diag: the diagonal of the bounding box
 /// of the chart's UVs, so the test does not depend on the chart's scale), or when its sign is
 /// opposite to the majority of the chart's triangles (positive wins a tie). Non-finite UVs
@@ -237,6 +247,25 @@ pub fn quad_folds(q: &Quad, uv: &[[f64; 2]], orientation: f64) -> usize {
     (f(0) + f(1)).max(f(2) + f(3))
 }
 
+/// Flipped or zero-area triangles among `shown` ([`is_flipped`]), oriented like the majority
+/// of `triangles` (the chart's own): the render triangles a chart measures beside its own
+/// ([`crate::charts::Chart::shown`]).
+pub fn count_shown_flips(triangles: &[[u32; 3]], shown: &[[u32; 3]], uv: &[[f64; 2]]) -> usize {
+    if shown.is_empty() {
+        return 0;
+    }
+    let get = |t: &[u32; 3]| [uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]];
+    let total: f64 = triangles.iter().map(|t| signed_area_2d(get(t))).sum();
+    let orientation = if total < 0.0 { -1.0 } else { 1.0 };
+    shown
+        .iter()
+        .filter(|t| {
+            let (a, l) = area_and_scale(get(t));
+            is_flipped(orientation * a, l)
+        })
+        .count()
+}
+
 /// Measure one chart given per-vertex positions and UVs over its triangles (no quads: every
 /// triangle counts on its own; see [`chart_metrics_with_quads`]).
 pub fn chart_metrics(
@@ -269,6 +298,7 @@ pub fn chart_metrics(
             overlap: boundary_self_overlap(uv, boundary_loops),
             distortion: Distortion { conformal: f64::INFINITY, area: f64::INFINITY, symmetric_dirichlet: f64::INFINITY },
             area_3d: 0.0,
+            density: density::spread_of(vec![(0.0, 0.0); triangles.len()], DEFAULT_DENSITY_BOUND),
         };
     }
     let scale = if area2 > 0.0 { (area3 / area2).sqrt() } else { 1.0 };
@@ -301,6 +331,7 @@ pub fn chart_metrics(
         distortion: Distortion { conformal: sum[0], area: sum[1], symmetric_dirichlet: sum[2] },
         // Back to the input's units; overflows to +∞ only beyond ~1e154 per coordinate.
         area_3d: area3 * s3 * s3,
+        density: density_spread(positions, triangles, uv, DEFAULT_DENSITY_BOUND),
     }
 }
 
@@ -686,7 +717,8 @@ pub fn measure_with_triangles(
         i = j;
     }
     let charts = build_charts_with(&mesh, &seams, selected, render.as_ref());
-    let measured: Vec<(ChartMetrics, Vec<(u32, [f64; 2])>)> = {
+    type Measured = (ChartMetrics, Vec<(u32, [f64; 2])>, Vec<(f64, f64)>);
+    let measured: Vec<Measured> = {
         use rayon::prelude::*;
         charts
             .par_iter()
@@ -697,20 +729,24 @@ pub fn measure_with_triangles(
                 }
                 let mut m = chart_metrics_with_quads(&ch.positions, &ch.triangles, &ch.quads, &vuv, &ch.boundary_loops);
                 m.faces = ch.faces.len();
-                (m, face_distortion(ch, &vuv))
+                m.flips += count_shown_flips(&ch.triangles, &ch.shown, &vuv);
+                (m, face_distortion(ch, &vuv), density::density_ratios(&ch.positions, &ch.triangles, &vuv))
             })
             .collect()
     };
     let mut per_face = vec![[f64::NAN; 2]; mesh.n_faces()];
     let mut per_chart = Vec::with_capacity(measured.len());
-    for (m, faces) in measured {
+    let mut samples = Vec::new();
+    for (m, faces, ratios) in measured {
         for (f, d) in faces {
             per_face[f as usize] = d;
         }
         per_chart.push(m);
+        samples.extend(ratios);
     }
     let mut out = aggregate(per_chart);
     out.per_face = per_face;
+    out.density = density::spread_of(samples, DEFAULT_DENSITY_BOUND);
     Ok(out)
 }
 
@@ -761,7 +797,15 @@ pub fn aggregate(per_chart: Vec<ChartMetrics>) -> MeshMetrics {
             d[2] += w * c.distortion.symmetric_dirichlet;
         }
     }
+    let outside = if total > 0.0 {
+        per_chart.iter().filter(|c| c.area_3d > 0.0).map(|c| c.area_3d / total * c.density.outside).sum()
+    } else if per_chart.is_empty() {
+        0.0
+    } else {
+        1.0
+    };
     MeshMetrics {
+        density: DensitySpread { p5: f64::NAN, p95: f64::NAN, outside, bound: DEFAULT_DENSITY_BOUND },
         charts: per_chart.len(),
         flips: per_chart.iter().map(|c| c.flips).sum(),
         overlapping_charts: per_chart.iter().filter(|c| c.overlap).count(),

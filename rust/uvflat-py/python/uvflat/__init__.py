@@ -40,6 +40,7 @@ from ._uvflat import (
     island_hulls,
     metrics,
 )
+from ._uvflat import plan_seams as _native_plan_seams
 from ._uvflat import unwrap as _native_unwrap
 
 __all__ = [
@@ -65,11 +66,12 @@ __all__ = [
     "factorization_seconds",
     "island_hulls",
     "metrics",
+    "plan_seams",
     "unwrap",
 ]
 
 
-def unwrap(positions, corner_verts, face_sizes, *, method="lscm", seams=None, selected=None,
+def unwrap(positions, corner_verts, face_sizes, *, method="abf", seams=None, selected=None,
            pins=None, pin_uvs=None, fit_to=None, triangles=None, auto_seams=True, max_stretch=2.0,
            max_cones=8,
            avoid_vertices=None, sharp_angle=None, progress=None, **options):
@@ -77,10 +79,14 @@ def unwrap(positions, corner_verts, face_sizes, *, method="lscm", seams=None, se
 
     The selection is split into charts along seams, non-manifold edges (counted in
     ``UnwrapResult.non_manifold_edges``) and the selection border; every chart is mapped by
-    ``method`` (charts in parallel, without the GIL). With ``auto_seams`` (the default) a
-    closed chart or a chart with handles is cut open through a few cone singularities (the
-    edges cut are in ``UnwrapResult.new_seams``; a piece whose flattening still flips, overlaps
-    or stretches beyond ``max_stretch`` gets more cones or is split). Charts that cannot be
+    ``method`` (charts in parallel, without the GIL). With ``auto_seams`` (the default) every
+    chart is held to one rule: each island is a disk, has no flipped triangle, its outline does
+    not cross itself, and at most 5% of its area has a texel density outside
+    [1/max_stretch, max_stretch] of the island's own. Closed charts, charts with handles and
+    charts with holes are cut (cones on the conformal scale factor, holes joined to the
+    outline); a chart that breaks the rule gets more cones or is split; the user's seams are
+    kept (new ones are in ``UnwrapResult.new_seams``). A chart that still breaks its rule is
+    reported ``status == "invalid"`` with ``reason_code`` saying how. Charts that cannot be
     mapped are not errors: they come back with ``status == "failed"`` and a ``reason``, and
     their faces get no UVs.
 
@@ -89,7 +95,7 @@ def unwrap(positions, corner_verts, face_sizes, *, method="lscm", seams=None, se
         corner_verts: (C,) vertex index of every corner, faces one after another.
         face_sizes: (F,) corners per face (each >= 3), summing to C.
         method: one of :data:`METHODS`: "tutte", "harmonic", "mean_value", "lscm",
-            "spectral", "abf", "arap", "slim", "mips", "scaffold".
+            "spectral", "abf" (default), "arap", "slim", "mips", "scaffold".
         seams: (E, 2) seam edges as vertex pairs (either order).
         selected: (F,) faces to unwrap; default all. Unselected faces get chart -1.
         pins: (P,) corner indices whose UVs are fixed.
@@ -101,11 +107,12 @@ def unwrap(positions, corner_verts, face_sizes, *, method="lscm", seams=None, se
             flips are counted (and avoided) on the triangles Blender shows; every face needs
             exactly corners - 2 rows. Quads count as folded when either diagonal split has a
             flipped triangle, with or without this argument.
-        auto_seams: cut closed and higher-genus charts automatically (default True); with
-            False they fail with a "mark seams" reason.
-        max_stretch: how much the length scale may vary inside one island (> 1, default
-            2.0): cones are added while the predicted scale factor exceeds it, and a piece
-            whose area distortion exceeds (1 + max_stretch) / 2 gets another cone or is split.
+        auto_seams: hold every chart to the atlas rule above, cutting where needed (default
+            True); with False nothing is cut, closed and higher-genus charts fail with a
+            "mark seams" reason, and a chart with flips or a crossing outline is "invalid".
+        max_stretch: Max Stretch s (> 1, default 2.0): at most 5% of an island's area may
+            have a texel density outside [1/s, s] of the island's own (``density_outside``
+            of the chart reports measures it against s).
         max_cones: most cone singularities per chart (default 8; a closed sphere gets at
             least 2).
         avoid_vertices: (K,) mesh vertex indices where seams must not go (no cut edge touches
@@ -114,7 +121,8 @@ def unwrap(positions, corner_verts, face_sizes, *, method="lscm", seams=None, se
             preferred for seams; default None (no preference).
         progress: ``callable(charts_done, charts_total)``, called from the worker threads
             with the GIL held, at most every 0.1 s and once after the last chart; returning
-            ``False`` cancels the unwrap (it raises :class:`Cancelled`); an exception it raises
+            a false value (``False``, ``0``, ``numpy.False_``; ``None`` goes on) cancels the
+            unwrap (it raises :class:`Cancelled`); an exception it raises
             cancels too and is re-raised. Cancellation is polled between charts and between
             iterations of the iterative methods.
         **options: the method's own options (any other keyword is an OptionError naming it):
@@ -156,3 +164,24 @@ def unwrap(positions, corner_verts, face_sizes, *, method="lscm", seams=None, se
                           triangles=triangles, auto_seams=auto_seams, max_stretch=max_stretch, max_cones=max_cones,
                           avoid_vertices=avoid_vertices, sharp_angle=sharp_angle,
                           progress=progress, **options)
+
+
+def plan_seams(positions, corner_verts, face_sizes, *, method="abf", seams=None, selected=None,
+               pins=None, pin_uvs=None, fit_to=None, triangles=None, auto_seams=True,
+               max_stretch=2.0, max_cones=8, avoid_vertices=None, sharp_angle=None, progress=None,
+               **options):
+    """The seams :func:`unwrap` would add with the same arguments, without any UVs: review and
+    edit them, then unwrap with them as ``seams``.
+
+    Returns:
+        (S, 2) uint32 array of mesh vertex pairs ``[a, b]`` with ``a < b``, sorted: exactly
+        ``unwrap(...).new_seams``.
+
+    Raises:
+        The errors of :func:`unwrap`.
+    """
+    return _native_plan_seams(positions, corner_verts, face_sizes, method=method, seams=seams,
+                              selected=selected, pins=pins, pin_uvs=pin_uvs, fit_to=fit_to,
+                              triangles=triangles, auto_seams=auto_seams, max_stretch=max_stretch,
+                              max_cones=max_cones, avoid_vertices=avoid_vertices,
+                              sharp_angle=sharp_angle, progress=progress, **options)

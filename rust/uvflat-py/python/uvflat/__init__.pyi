@@ -59,7 +59,7 @@ class UnwrapOptions(TypedDict, total=False):
     """slim: steps after the first, "newton" (default, projected Newton) or "proxy" (SLIM's own)."""
 
 _ChartKind = Literal["disk", "disk_with_holes", "closed", "higher_genus"]
-_ChartStatus = Literal["solved", "fallback", "failed"]
+_ChartStatus = Literal["solved", "fallback", "invalid", "failed"]
 
 _Floats = npt.ArrayLike
 _Ints = npt.ArrayLike
@@ -94,7 +94,8 @@ class ChartReport:
         """Topological class: "disk", "disk_with_holes", "closed" or "higher_genus"."""
     @property
     def status(self) -> _ChartStatus:
-        """"solved", "fallback" (mapped by another method, see ``reason``) or "failed" (no UVs)."""
+        """"solved", "fallback" (mapped by another method, see ``reason``), "invalid" (UVs
+        written, but the chart breaks its rule: see ``reason_code``) or "failed" (no UVs)."""
     @property
     def reason(self) -> str | None:
         """Why the chart failed or fell back, or a note on how pins were honoured."""
@@ -130,9 +131,22 @@ class ChartReport:
     def cut_length(self) -> float:
         """Total 3D length of the automatic seams made for this chart (0 if it was not cut)."""
     @property
-    def reason_code(self) -> Literal["solved", "solved_with_note", "fallback", "failed_closed",
-                                     "failed_genus", "failed_defect", "failed_solver"]:
+    def reason_code(self) -> Literal["solved", "solved_with_note", "fallback", "invalid_flips",
+                                     "invalid_overlap", "invalid_not_disk", "invalid_stretch",
+                                     "failed_closed", "failed_genus", "failed_defect",
+                                     "failed_no_area", "failed_solver"]:
         """Stable code of the outcome, beside the prose ``reason``."""
+    @property
+    def density_p5(self) -> float:
+        """Area-weighted 5th percentile of the texel-density ratio (a triangle's UV area per
+        3D area over the island's; NaN if failed)."""
+    @property
+    def density_p95(self) -> float:
+        """Area-weighted 95th percentile of the texel-density ratio (NaN if failed)."""
+    @property
+    def density_outside(self) -> float:
+        """Share of the island's 3D area (0 to 1) with a density ratio outside
+        [1/max_stretch, max_stretch] (NaN if failed)."""
     def as_dict(self) -> dict[str, Any]:
         """All fields as a plain dict."""
 
@@ -200,6 +214,17 @@ class Metrics:
     def flips(self) -> int:
         """Triangles whose signed UV area opposes their chart's majority, plus zero-area ones."""
     @property
+    def density_outside(self) -> float:
+        """Share of the 3D area (0 to 1) whose texel density is outside [1/2, 2] of its own
+        island's."""
+    @property
+    def density_p5(self) -> float:
+        """Area-weighted 5th percentile of the texel-density ratio (each triangle against its
+        island)."""
+    @property
+    def density_p95(self) -> float:
+        """Area-weighted 95th percentile of the texel-density ratio."""
+    @property
     def overlapping_charts(self) -> int:
         """Charts whose UV boundary crosses itself."""
     @property
@@ -230,7 +255,7 @@ def unwrap(
     corner_verts: _Ints,
     face_sizes: _Ints,
     *,
-    method: Method = "lscm",
+    method: Method = "abf",
     seams: _Ints | None = None,
     selected: _Bools | None = None,
     pins: _Ints | None = None,
@@ -356,6 +381,30 @@ def island_hulls(
         InputError: wrong shape, dtype or length, or an island number not below ``F`` (the
             message names the face).
     """
+
+def plan_seams(
+    positions: _Floats,
+    corner_verts: _Ints,
+    face_sizes: _Ints,
+    *,
+    method: Method = "abf",
+    seams: _Ints | None = None,
+    selected: _Bools | None = None,
+    pins: _Ints | None = None,
+    pin_uvs: _Floats | None = None,
+    fit_to: _Floats | None = None,
+    triangles: _Ints | None = None,
+    auto_seams: bool = True,
+    max_stretch: float = 2.0,
+    max_cones: int = 8,
+    avoid_vertices: _Ints | None = None,
+    sharp_angle: float | None = None,
+    progress: Callable[[int, int], bool | None] | None = None,
+    **options: Unpack[UnwrapOptions],
+) -> npt.NDArray[np.uint32]:
+    """The seams :func:`unwrap` would add with the same arguments, without any UVs: (S, 2)
+    mesh vertex pairs ``[a, b]``, ``a < b``, sorted (exactly ``unwrap(...).new_seams``).
+    Raises the errors of :func:`unwrap`."""
 
 def metrics(
     positions: _Floats,

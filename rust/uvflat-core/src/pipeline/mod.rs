@@ -1,0 +1,126 @@
+//! The chart pipeline: the one road every chart of an unwrap takes.
+//!
+//! ```text
+//! triage ──► plan cuts ──► solve ──► check the rule ──► repair ──┐
+//!   │        (cuts/)      (solve)      (rule)          (repair) │
+//!   └──── solve as it is ───────────────►│◄──────── bounded ─────┘
+//! ```
+//!
+//! 1. [`triage`]: with automatic seams on, closed charts, charts with handles and charts with
+//!    holes are cut first; disks are solved as they are and repaired only if they break the
+//!    rule; pinned disks and charts with a defect are never cut. With automatic seams off
+//!    every chart is solved as it is.
+//! 2. Plan cuts: [`crate::cuts::ChartCutter`] (cones on the conformal scale factor, handle
+//!    loops, holes and cones joined to the outline by a Steiner tree of low-cost edges).
+//! 3. Solve: [`solve::solve_chart`] maps a piece with the user's method, places and measures
+//!    it.
+//! 4. Check: [`rule::AtlasRule`] (a disk, no flips, an outline that does not cross itself,
+//!    at most 5% of the area outside `[1/s, s]` of the island's density).
+//! 5. Repair: [`repair::repair`] adds a cone at the worst region and re-cuts, then halves the
+//!    chart, each half taking the road again.
+//!
+//! A new step is one file here; the outcome of every chart is a typed value
+//! ([`outcome::ChartStatus`], [`outcome::Problem`]).
+
+pub mod outcome;
+pub mod repair;
+pub mod rule;
+pub mod solve;
+pub mod triage;
+
+use std::collections::HashMap;
+
+use crate::charts::{Chart, FaceTriangulation};
+use crate::mesh::PolyMesh;
+use crate::unwrap::UnwrapOptions;
+use outcome::ChartReport;
+use rule::AtlasRule;
+use triage::Triage;
+
+/// What the pipeline reads from the unwrap.
+pub struct Context<'a, 'm> {
+    /// The validated mesh.
+    pub mesh: &'a PolyMesh<'m>,
+    /// The render triangulation, so rebuilt pieces split n-gons like the input charts.
+    pub render: Option<&'a FaceTriangulation>,
+    /// Pinned corners and their UVs.
+    pub pins: &'a HashMap<u32, [f64; 2]>,
+    /// The unwrap's options.
+    pub options: &'a UnwrapOptions,
+    /// Per mesh vertex: whether new seams must stay away from it.
+    pub avoid: &'a [bool],
+    /// The rule every chart is held to.
+    pub rule: AtlasRule,
+}
+
+/// One solved piece of the output: an input chart as built, or a piece of it made by cuts.
+pub struct Piece {
+    /// The rebuilt chart, or `None` for the input chart itself.
+    pub chart: Option<Chart>,
+    /// Its report.
+    pub report: ChartReport,
+    /// UV per chart vertex (`None` when the chart failed).
+    pub uv: Option<Vec<[f64; 2]>>,
+    /// Seams added for this piece (mesh vertex pairs).
+    pub seams: Vec<[u32; 2]>,
+    /// 3D area of the piece.
+    pub area: f64,
+}
+
+impl Piece {
+    /// A piece of `chart` (its 3D area measured here).
+    pub fn new(chart: Option<Chart>, report: ChartReport, uv: Option<Vec<[f64; 2]>>, seams: Vec<[u32; 2]>) -> Piece {
+        let area = chart.as_ref().map_or(0.0, chart_area);
+        Piece { chart, report, uv, seams, area }
+    }
+}
+
+fn chart_area(chart: &Chart) -> f64 {
+    chart
+        .triangles
+        .iter()
+        .map(|t| {
+            crate::geometry::triangle_area([
+                chart.positions[t[0] as usize],
+                chart.positions[t[1] as usize],
+                chart.positions[t[2] as usize],
+            ])
+        })
+        .sum()
+}
+
+/// Take one input chart through the pipeline (`base_seams`: the user's seams). A piece that
+/// is the chart itself, uncut, carries `chart: None`.
+pub fn run_chart(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]]) -> Vec<Piece> {
+    road(ctx, chart, base_seams, 0)
+}
+
+/// [`run_chart`] for an owned piece (a half of a split) at split depth `depth`: every piece
+/// carries its chart.
+pub(crate) fn run(ctx: &Context<'_, '_>, chart: Chart, base_seams: &[[u32; 2]], depth: usize) -> Vec<Piece> {
+    let mut out = road(ctx, &chart, base_seams, depth);
+    if let Some(p) = out.iter_mut().find(|p| p.chart.is_none()) {
+        p.chart = Some(chart);
+    }
+    out
+}
+
+fn road(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], depth: usize) -> Vec<Piece> {
+    let road = triage::triage(chart, ctx.options.auto_seams.enabled, pinned(ctx, chart));
+    if road == Triage::Cut {
+        return repair::repair(ctx, chart, base_seams, depth, None);
+    }
+    let (report, uv) = solve::solve_chart(chart, ctx.pins, ctx.options, &ctx.rule);
+    let broken = !report.status.mapped() || ctx.rule.broken(&report).is_some();
+    let first = Piece { chart: None, report, uv, seams: Vec::new(), area: chart_area(chart) };
+    if road == Triage::SolveThenRepair && broken {
+        repair::repair(ctx, chart, base_seams, depth, Some(first))
+    } else {
+        vec![first]
+    }
+}
+
+/// Whether any corner of `chart` is pinned.
+fn pinned(ctx: &Context<'_, '_>, chart: &Chart) -> bool {
+    !ctx.pins.is_empty() && chart.corner_vertex.iter().any(|(c, _)| ctx.pins.contains_key(c))
+}

@@ -1,0 +1,140 @@
+//! Solve one chart with the user's method, place it, measure it and hold it to its rule.
+
+use std::collections::HashMap;
+
+use super::outcome::{ChartReport, ChartStatus, Problem};
+use super::rule::AtlasRule;
+use crate::charts::{Chart, ChartKind};
+use crate::methods::{self, ChartFailure};
+use crate::metrics;
+use crate::unwrap::{Fit, UnwrapOptions};
+
+/// Map `chart` with `options.method`, place it per `options.fit` (unpinned charts only),
+/// measure it (flips on the render triangles and both splits of every quad, outline overlap,
+/// distortion, density spread against `rule.max_stretch`) and set its status and problem.
+///
+/// Never fails: a chart the method cannot map comes back [`ChartStatus::Failed`] with no UVs.
+pub fn solve_chart(
+    chart: &Chart,
+    pin_of_corner: &HashMap<u32, [f64; 2]>,
+    options: &UnwrapOptions,
+    rule: &AtlasRule,
+) -> (ChartReport, Option<Vec<[f64; 2]>>) {
+    let start = std::time::Instant::now();
+    let mut report = ChartReport::new(chart, options.method.name());
+    // Pins per chart vertex (average when corners of one vertex disagree).
+    let pins = chart.vertex_pins(pin_of_corner);
+    let mut solution = match methods::solve(&options.method, chart, &pins) {
+        Ok(s) => s,
+        Err(ChartFailure(reason)) => {
+            report.problem = Some(if chart.defect.is_some() {
+                Problem::Defect
+            } else {
+                match chart.kind {
+                    ChartKind::Closed => Problem::ClosedSurface,
+                    ChartKind::HigherGenus => Problem::Handles,
+                    _ => Problem::Solver,
+                }
+            });
+            report.reason = Some(reason);
+            report.seconds = start.elapsed().as_secs_f64();
+            return (report, None);
+        }
+    };
+    if let Some(fallback) = solution.fallback.take() {
+        report.status = ChartStatus::Fallback;
+        report.problem = Some(Problem::FellBack);
+        report.method = fallback.method;
+        report.reason = Some(fallback.reason);
+    } else {
+        report.status = ChartStatus::Solved;
+        report.reason = solution.note.take();
+    }
+    report.iterations = solution.iterations;
+    report.residual = solution.residual;
+    if pins.is_empty() {
+        if let Some(note) = place_chart(chart, &mut solution.uv, &options.fit) {
+            append(&mut report.reason, note);
+        }
+    }
+    let m = metrics::chart_metrics_with_quads(&chart.positions, &chart.triangles, &chart.quads, &solution.uv, &chart.boundary_loops);
+    if !(m.area_3d > 0.0) {
+        // Every face is degenerate (collinear or coincident corners): no UV map can match a
+        // surface without area, so the chart keeps its UVs and says why.
+        report.status = ChartStatus::Failed;
+        report.problem = Some(Problem::NoArea);
+        report.method = options.method.name();
+        report.reason = Some("the chart has no 3D area (every face is degenerate): its UVs are left as they were".into());
+        report.seconds = start.elapsed().as_secs_f64();
+        return (report, None);
+    }
+    // Flips on the render triangles of n-gons that kept the core's split count too.
+    report.flips = m.flips + metrics::count_shown_flips(&chart.triangles, &chart.shown, &solution.uv);
+    report.overlap = m.overlap;
+    report.distortion = m.distortion;
+    report.density = metrics::density_spread(&chart.positions, &chart.triangles, &solution.uv, rule.max_stretch);
+    hold_to(rule, &mut report);
+    report.seconds = start.elapsed().as_secs_f64();
+    (report, Some(solution.uv))
+}
+
+/// Mark a mapped report [`ChartStatus::Invalid`] when it breaks `rule`, saying how.
+pub fn hold_to(rule: &AtlasRule, report: &mut ChartReport) {
+    let Some(problem) = rule.broken(report) else { return };
+    let what = match problem {
+        Problem::Flips => format!("{} flipped or zero-area UV triangle(s)", report.flips),
+        Problem::Overlap => "the island's outline crosses itself".to_string(),
+        Problem::NotDisk => format!(
+            "the island is not a disk ({} boundary loop(s), genus {})",
+            report.boundary_loops, report.genus
+        ),
+        Problem::Stretch => format!(
+            "{:.1}% of the island has a texel density outside [1/{s}, {s}] of its own (at most {:.0}% allowed; 5th–95th percentile {:.2}–{:.2})",
+            100.0 * report.density.outside,
+            100.0 * super::rule::MAX_OUTSIDE_SHARE,
+            report.density.p5,
+            report.density.p95,
+            s = report.density.bound,
+        ),
+        _ => return,
+    };
+    report.status = ChartStatus::Invalid;
+    report.problem = Some(problem);
+    append(&mut report.reason, what);
+}
+
+/// Append `note` to a report's prose reason.
+pub fn append(reason: &mut Option<String>, note: String) {
+    *reason = Some(match reason.take() {
+        Some(r) => format!("{r}; {note}"),
+        None => note,
+    });
+}
+
+/// Scale/place an unpinned chart's UVs per [`Fit`]. Returns a note for the report when the
+/// fit onto the previous UVs was degenerate and the chart was area-scaled instead.
+fn place_chart(chart: &Chart, uv: &mut [[f64; 2]], fit: &Fit) -> Option<String> {
+    let tris = &chart.triangles;
+    match fit {
+        Fit::AreaScaled => metrics::area_normalize(&chart.positions, tris, uv, [0.0, 0.0]),
+        Fit::Previous(prev) => {
+            // Previous UV per chart vertex: the first corner seen for that vertex (a chart
+            // holds only corners of selected faces, so nothing else is read).
+            let mut target = vec![[f64::NAN; 2]; uv.len()];
+            for &(c, v) in chart.corner_vertex.iter() {
+                if target[v as usize][0].is_nan() {
+                    target[v as usize] = prev[c as usize];
+                }
+            }
+            if !metrics::fit_similarity(uv, &target, tris) {
+                let seen: Vec<[f64; 2]> = target.iter().copied().filter(|p| !p[0].is_nan()).collect();
+                let (centre, _) = crate::geometry::bounding_frame(&seen);
+                metrics::area_normalize(&chart.positions, tris, uv, centre);
+                return Some(
+                    "the previous UVs admit no rotation-and-scale fit (collapsed or mirrored): area-scaled and centred on them instead".into(),
+                );
+            }
+        }
+    }
+    None
+}

@@ -1,0 +1,296 @@
+//! The atlas rule on every chart of every mesh (automatic seams on): every island is a disk,
+//! has no flipped triangle, an outline that does not cross itself, and at most 5% of its area
+//! outside [1/s, s] of its own texel density — measured on the returned UVs by `metrics`,
+//! independently of the pipeline's own reports. Open meshes, meshes with holes, closed meshes
+//! and several parts, triangles and quads, with abf, slim, lscm, mips and scaffold.
+
+mod common;
+
+use common::{load, shared_meshes, Soup};
+use uvflat_core::charts::build_charts;
+use uvflat_core::mesh::PolyMesh;
+use uvflat_core::methods::{abf, mips, scaffold, slim};
+use uvflat_core::{metrics, unwrap, ChartKind, ChartStatus, MeshInput, Method, UnwrapOptions, Unwrapped};
+
+fn methods() -> Vec<Method> {
+    vec![
+        Method::Abf(abf::AbfOptions::default()),
+        Method::Slim(slim::SlimOptions::default()),
+        Method::Lscm,
+        Method::Mips(mips::MipsOptions::default()),
+        Method::Scaffold(scaffold::ScaffoldOptions::default()),
+    ]
+}
+
+/// A latitude–longitude sphere of radius 1: `nu` segments, `nv` rings (quads, triangle fans
+/// at the poles). Faces for which `keep(centroid)` is false are left out.
+fn sphere(nu: usize, nv: usize, keep: impl Fn([f64; 3]) -> bool) -> Soup {
+    let mut positions = vec![[0.0, 0.0, 1.0]];
+    for j in 1..nv {
+        let t = std::f64::consts::PI * j as f64 / nv as f64;
+        for i in 0..nu {
+            let a = std::f64::consts::TAU * i as f64 / nu as f64;
+            positions.push([t.sin() * a.cos(), t.sin() * a.sin(), t.cos()]);
+        }
+    }
+    positions.push([0.0, 0.0, -1.0]);
+    let south = (positions.len() - 1) as u32;
+    let ring = |j: usize, i: usize| (1 + (j - 1) * nu + i % nu) as u32;
+    let mut faces: Vec<Vec<u32>> = Vec::new();
+    for i in 0..nu {
+        faces.push(vec![0, ring(1, i), ring(1, i + 1)]);
+    }
+    for j in 1..nv - 1 {
+        for i in 0..nu {
+            faces.push(vec![ring(j, i), ring(j + 1, i), ring(j + 1, i + 1), ring(j, i + 1)]);
+        }
+    }
+    for i in 0..nu {
+        faces.push(vec![ring(nv - 1, i), south, ring(nv - 1, i + 1)]);
+    }
+    soup_of(positions, faces, keep)
+}
+
+/// A soup of the faces whose centroid `keep` accepts, unused vertices dropped.
+fn soup_of(positions: Vec<[f64; 3]>, faces: Vec<Vec<u32>>, keep: impl Fn([f64; 3]) -> bool) -> Soup {
+    let mut used = vec![u32::MAX; positions.len()];
+    let mut out = Soup { positions: Vec::new(), corner_verts: Vec::new(), face_sizes: Vec::new() };
+    for f in faces {
+        let mut c = [0.0; 3];
+        for &v in &f {
+            for k in 0..3 {
+                c[k] += positions[v as usize][k] / f.len() as f64;
+            }
+        }
+        if !keep(c) {
+            continue;
+        }
+        for &v in &f {
+            if used[v as usize] == u32::MAX {
+                used[v as usize] = out.positions.len() as u32;
+                out.positions.push(positions[v as usize]);
+            }
+            out.corner_verts.push(used[v as usize]);
+        }
+        out.face_sizes.push(f.len() as u32);
+    }
+    out
+}
+
+/// An open tube (two boundary loops) of quads.
+fn tube(nu: usize, nv: usize, h: f64) -> Soup {
+    let (s, _) = common::cut_cylinder(nu, nv, h);
+    s
+}
+
+/// Two parts: a hemisphere and a moved copy of a tube.
+fn two_parts() -> Soup {
+    let mut a = sphere(24, 12, |c| c[2] > 0.0);
+    let b = tube(16, 6, 2.0);
+    let off = a.positions.len() as u32;
+    a.positions.extend(b.positions.iter().map(|p| [p[0] + 4.0, p[1], p[2]]));
+    a.corner_verts.extend(b.corner_verts.iter().map(|v| v + off));
+    a.face_sizes.extend(&b.face_sizes);
+    a
+}
+
+/// A cube of 6 × n × n quads.
+fn cube(n: usize) -> Soup {
+    let mut positions: Vec<[f64; 3]> = Vec::new();
+    let mut index = std::collections::HashMap::new();
+    let mut id = |p: [i64; 3]| -> u32 {
+        *index.entry(p).or_insert_with(|| {
+            positions.push([p[0] as f64 / n as f64, p[1] as f64 / n as f64, p[2] as f64 / n as f64]);
+            (positions.len() - 1) as u32
+        })
+    };
+    let n_ = n as i64;
+    let mut faces = Vec::new();
+    for axis in 0..3 {
+        for side in [0, n_] {
+            for i in 0..n_ {
+                for j in 0..n_ {
+                    let at = |a: i64, b: i64| {
+                        let mut p = [0i64; 3];
+                        p[axis] = side;
+                        p[(axis + 1) % 3] = a;
+                        p[(axis + 2) % 3] = b;
+                        p
+                    };
+                    let mut f = vec![id(at(i, j)), id(at(i + 1, j)), id(at(i + 1, j + 1)), id(at(i, j + 1))];
+                    if side == 0 {
+                        f.reverse();
+                    }
+                    faces.push(f);
+                }
+            }
+        }
+    }
+    soup_of(positions, faces, |_| true)
+}
+
+/// The generated meshes: (name, soup).
+fn meshes() -> Vec<(&'static str, Soup)> {
+    vec![
+        ("open hemisphere", sphere(32, 16, |c| c[2] > 0.0)),
+        ("open tube", tube(24, 12, 3.0)),
+        ("sphere with 3 holes", sphere(32, 16, |c| c[2] < 0.8 && c[0] < 0.85 && c[1] < 0.85)),
+        ("two parts", two_parts()),
+        ("cube", cube(4)),
+        ("flat quad grid", {
+            let faces: Vec<Vec<u32>> = (0..8)
+                .flat_map(|j| (0..8).map(move |i| vec![j * 9 + i, j * 9 + i + 1, (j + 1) * 9 + i + 1, (j + 1) * 9 + i]))
+                .collect();
+            let positions = (0..9).flat_map(|j| (0..9).map(move |i| [i as f64, j as f64, 0.0])).collect();
+            soup_of(positions, faces, |_| true)
+        }),
+    ]
+}
+
+/// The rule on the returned UVs, measured by `metrics` (not by the reports), and the
+/// islands' topology from the user's and the new seams.
+fn check_rule(name: &str, method: &str, s: &Soup, user_seams: &[[u32; 2]], r: &Unwrapped) {
+    let ctx = format!("{name} / {method}");
+    assert!(r.charts.iter().all(|c| c.status != ChartStatus::Failed), "{ctx}: a chart failed: {:?}", r.charts);
+    for c in &r.charts {
+        assert!(
+            matches!(c.status, ChartStatus::Solved | ChartStatus::Fallback),
+            "{ctx}: chart {} is {:?} ({}): {:?}",
+            c.id,
+            c.status,
+            c.reason_code(),
+            c.reason
+        );
+    }
+    let m = metrics::measure(&s.positions, &s.corner_verts, &s.face_sizes, &r.uv, None).unwrap();
+    assert_eq!(m.flips, 0, "{ctx}: flips");
+    assert_eq!(m.overlapping_charts, 0, "{ctx}: an outline crosses itself");
+    for (i, c) in m.per_chart.iter().enumerate() {
+        assert!(c.density.outside <= 0.05 + 1e-12, "{ctx}: island {i}: {:.3} of its area outside [1/2, 2]", c.density.outside);
+    }
+    // Every island is a disk: the charts of the user's seams plus the new ones.
+    let mesh = PolyMesh::new(&s.positions, &s.corner_verts, &s.face_sizes).unwrap();
+    let mut all: Vec<[u32; 2]> = user_seams.to_vec();
+    all.extend_from_slice(&r.new_seams);
+    for ch in build_charts(&mesh, &all, None) {
+        assert_eq!(ch.kind, ChartKind::Disk, "{ctx}: an island of {} faces is {:?}", ch.faces.len(), ch.kind);
+    }
+    assert_eq!(m.charts, r.charts.len(), "{ctx}: islands measured against charts reported");
+}
+
+#[test]
+fn every_island_keeps_the_rule_on_generated_meshes() {
+    for (name, s) in meshes() {
+        for method in methods() {
+            let r = unwrap(&s.input(), &UnwrapOptions { method: method.clone(), ..Default::default() }).unwrap();
+            check_rule(name, method.name(), &s, &[], &r);
+        }
+    }
+}
+
+/// A flat grid is already a perfect disk: no cut, one island.
+#[test]
+fn a_valid_disk_is_not_cut() {
+    let (_, s) = meshes().into_iter().find(|m| m.0 == "flat quad grid").unwrap();
+    let r = unwrap(&s.input(), &UnwrapOptions::default()).unwrap();
+    assert!(r.new_seams.is_empty());
+    assert_eq!(r.charts.len(), 1);
+    assert_eq!(r.charts[0].status, ChartStatus::Solved);
+}
+
+/// The user's seams are kept: every user seam edge separates UVs (its two faces' corners
+/// differ at an end) in the output.
+#[test]
+fn user_seams_are_kept() {
+    let s = sphere(24, 12, |c| c[2] > -0.5);
+    // A meridian seam from the pole down to the rim.
+    let mesh = PolyMesh::new(&s.positions, &s.corner_verts, &s.face_sizes).unwrap();
+    let mut seams = Vec::new();
+    for f in 0..mesh.n_faces() {
+        for c in mesh.face_corners(f) {
+            let (a, b) = (mesh.corner_vert(c), mesh.corner_vert(mesh.next_corner(f, c)));
+            let (pa, pb) = (s.positions[a as usize], s.positions[b as usize]);
+            if pa[1].abs() < 1e-9 && pb[1].abs() < 1e-9 && pa[0] >= -1e-9 && pb[0] >= -1e-9 && a != b {
+                seams.push([a.min(b), a.max(b)]);
+            }
+        }
+    }
+    seams.sort_unstable();
+    seams.dedup();
+    assert!(seams.len() >= 4);
+    for method in [Method::Abf(Default::default()), Method::Slim(Default::default())] {
+        let input = MeshInput { seams: &seams, ..s.input() };
+        let r = unwrap(&input, &UnwrapOptions { method: method.clone(), ..Default::default() }).unwrap();
+        check_rule("hemisphere with a seam", method.name(), &s, &seams, &r);
+        // UV of (face, vertex) pairs: the two sides of each seam edge differ.
+        let mut uv_at = std::collections::HashMap::new();
+        for f in 0..mesh.n_faces() {
+            for c in mesh.face_corners(f) {
+                uv_at.insert((f, mesh.corner_vert(c)), r.uv[c]);
+            }
+        }
+        for e in &seams {
+            let faces: Vec<usize> = (0..mesh.n_faces())
+                .filter(|&f| uv_at.contains_key(&(f, e[0])) && uv_at.contains_key(&(f, e[1])))
+                .filter(|&f| {
+                    mesh.face_corners(f).any(|c| {
+                        let (a, b) = (mesh.corner_vert(c), mesh.corner_vert(mesh.next_corner(f, c)));
+                        [a.min(b), a.max(b)] == *e
+                    })
+                })
+                .collect();
+            assert_eq!(faces.len(), 2, "seam {e:?}");
+            let same = (0..2).all(|k| uv_at[&(faces[0], e[k])] == uv_at[&(faces[1], e[k])]);
+            assert!(!same, "{}: the user's seam {e:?} was closed", method.name());
+        }
+    }
+}
+
+/// With automatic seams off nothing is cut, and a chart that breaks the promise (flips or a
+/// crossing outline) is never reported solved.
+#[test]
+fn without_auto_seams_nothing_is_cut_and_broken_charts_say_so() {
+    let s = sphere(32, 16, |c| c[2] < 0.8 && c[0] < 0.85 && c[1] < 0.85);
+    for method in methods() {
+        let mut o = UnwrapOptions { method: method.clone(), ..Default::default() };
+        o.auto_seams.enabled = false;
+        let r = unwrap(&s.input(), &o).unwrap();
+        assert!(r.new_seams.is_empty(), "{}", method.name());
+        let m = metrics::measure(&s.positions, &s.corner_verts, &s.face_sizes, &r.uv, None).unwrap();
+        for (c, mc) in r.charts.iter().zip(&m.per_chart) {
+            if mc.flips > 0 || mc.overlap {
+                assert_eq!(c.status, ChartStatus::Invalid, "{}: {:?}", method.name(), c);
+                assert!(c.reason_code().starts_with("invalid_"));
+            }
+        }
+    }
+}
+
+/// Same output whatever the run and the thread count.
+#[test]
+fn output_is_identical_across_runs_and_thread_counts() {
+    let s = two_parts();
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| unwrap(&s.input(), &UnwrapOptions::default()).unwrap())
+    };
+    let a = run(1);
+    let b = run(2);
+    let c = run(2);
+    assert_eq!(a.uv, b.uv);
+    assert_eq!(b.uv, c.uv);
+    assert_eq!(a.new_seams, b.new_seams);
+}
+
+/// The shared meshes (closed and open): the rule on every island with abf and slim.
+#[test]
+fn every_island_keeps_the_rule_on_shared_meshes() {
+    let Some(dir) = shared_meshes() else { return };
+    for name in ["bunny.off", "3holes.off", "halftunnel.off", "camelhead.off", "cow.off"] {
+        let s = load(&dir.join(name));
+        for method in [Method::Abf(Default::default()), Method::Slim(Default::default())] {
+            let r = unwrap(&s.input(), &UnwrapOptions { method: method.clone(), ..Default::default() }).unwrap();
+            check_rule(name, method.name(), &s, &[], &r);
+        }
+    }
+}
