@@ -123,15 +123,19 @@ const NEAR: f64 = 1e-10;
 ///   neighbours changed: the best ear of the current ring is popped, exactly as a full rescan
 ///   would pick it;
 /// * whether another corner lies in an ear is asked of a uniform grid over the remaining
-///   corners (about one corner per cell), or of the ring itself when the ear's bounding box
-///   covers more cells than corners remain;
+///   corners that are not strictly convex (only they can lie in an ear of a simple polygon:
+///   if any corner does, the one of the intruding chain farthest from the ear's diagonal is
+///   reflex), or of their list when the ear's bounding box covers more cells than they are;
+///   a convex polygon's ears are then tested in O(1);
 /// * an ear that holds a corner waits on that corner ("blocked by it"): vertices never move,
-///   so the ear stays invalid until that corner is cut, and is evaluated again only then.
+///   so the ear stays invalid until that corner turns convex or is cut, and is evaluated
+///   again only then.
 ///
-/// The same ears are valid as in the exhaustive test (a convex corner whose triangle holds no
-/// other remaining corner, boundary included), so the result is the same triangulation up to
-/// ties of quality within [`QUALITY_QUANTUM`]. When no valid ear is left (degenerate or
-/// self-intersecting input) the rest is fanned.
+/// On a simple polygon the same ears are valid as in the exhaustive test (a convex corner
+/// whose triangle holds no other remaining corner, boundary included, within round-off), so
+/// the result is the same triangulation up to ties of quality within [`QUALITY_QUANTUM`]. When
+/// no valid ear is left (degenerate or self-intersecting input) every corner is evaluated once
+/// more, and then the rest is fanned.
 fn ear_clip(p2: &[[f64; 2]], taken: &mut impl FnMut(usize, usize) -> bool) -> Vec<[usize; 3]> {
     use std::cmp::Reverse;
     use std::collections::BinaryHeap;
@@ -141,7 +145,17 @@ fn ear_clip(p2: &[[f64; 2]], taken: &mut impl FnMut(usize, usize) -> bool) -> Ve
     let mut alive = vec![true; n];
     let mut version = vec![0u32; n];
     let mut remaining = n;
-    let mut grid = Grid::new(p2);
+    // Corners that are not strictly convex: only they can lie in an ear of a simple polygon
+    // (if any corner does, the corner of the intruding chain farthest from the ear's diagonal
+    // is one of them).
+    let not_convex = |b: usize, prev: &[usize], next: &[usize]| {
+        let (pa, pb, pc) = (p2[prev[b]], p2[b], p2[next[b]]);
+        let area2 = (pb[0] - pa[0]) * (pc[1] - pa[1]) - (pb[1] - pa[1]) * (pc[0] - pa[0]);
+        let (ab, bc) = ((pb[0] - pa[0]).hypot(pb[1] - pa[1]), (pc[0] - pb[0]).hypot(pc[1] - pb[1]));
+        !(area2 > COLLINEAR * ab * bc)
+    };
+    let mut reflex: Vec<bool> = (0..n).map(|b| not_convex(b, &prev, &next)).collect();
+    let mut grid = Grid::new(p2, &reflex);
     // Corners closer than this to an ear's sides count as in it (round-off of the projection).
     let near = NEAR * grid.extent;
     // Ears waiting on the corner that lies in them: (ear corner, its version then).
@@ -154,21 +168,18 @@ fn ear_clip(p2: &[[f64; 2]], taken: &mut impl FnMut(usize, usize) -> bool) -> Ve
     let mut evaluate = |b: usize,
                         prev: &[usize],
                         next: &[usize],
-                        alive: &[bool],
                         remaining: usize,
                         version: &[u32],
                         grid: &Grid,
                         blocked: &mut [Vec<(u32, u32)>],
                         heap: &mut BinaryHeap<(i64, Reverse<u32>, u32)>| {
-        let (a, c) = (prev[b], next[b]);
-        let (pa, pb, pc) = (p2[a], p2[b], p2[c]);
-        let area2 = (pb[0] - pa[0]) * (pc[1] - pa[1]) - (pb[1] - pa[1]) * (pc[0] - pa[0]);
-        let (ab, bc) = ((pb[0] - pa[0]).hypot(pb[1] - pa[1]), (pc[0] - pb[0]).hypot(pc[1] - pb[1]));
-        if !(area2 > COLLINEAR * ab * bc) {
+        if not_convex(b, prev, next) {
             return; // reflex, or straight to round-off (collinear corners of a 3D face)
         }
+        let (a, c) = (prev[b], next[b]);
+        let (pa, pb, pc) = (p2[a], p2[b], p2[c]);
         let inside = |o: usize| o != a && o != b && o != c && point_near_triangle(p2[o], pa, pb, pc, near);
-        if let Some(o) = grid.find(pa, pb, pc, near, &inside, b, next, alive, remaining) {
+        if let Some(o) = grid.find(pa, pb, pc, near, &inside) {
             blocked[o].push((b as u32, version[b]));
             return;
         }
@@ -178,7 +189,7 @@ fn ear_clip(p2: &[[f64; 2]], taken: &mut impl FnMut(usize, usize) -> bool) -> Ve
     };
 
     for b in 0..n {
-        evaluate(b, &prev, &next, &alive, remaining, &version, &grid, &mut blocked, &mut heap);
+        evaluate(b, &prev, &next, remaining, &version, &grid, &mut blocked, &mut heap);
     }
     let mut rescanned = false;
     while remaining > 3 {
@@ -193,7 +204,7 @@ fn ear_clip(p2: &[[f64; 2]], taken: &mut impl FnMut(usize, usize) -> bool) -> Ve
             let mut b = (0..n).find(|&i| alive[i]).expect("corners remain");
             for _ in 0..remaining {
                 version[b] += 1;
-                evaluate(b, &prev, &next, &alive, remaining, &version, &grid, &mut blocked, &mut heap);
+                evaluate(b, &prev, &next, remaining, &version, &grid, &mut blocked, &mut heap);
                 b = next[b];
             }
             continue;
@@ -206,20 +217,37 @@ fn ear_clip(p2: &[[f64; 2]], taken: &mut impl FnMut(usize, usize) -> bool) -> Ve
         let (a, c) = (prev[b], next[b]);
         out.push([a, b, c]);
         alive[b] = false;
-        grid.remove(b, p2[b]);
+        if reflex[b] {
+            grid.remove(b, p2[b]);
+        }
         remaining -= 1;
         next[a] = c;
         prev[c] = a;
-        // The two neighbours have new ears; the ears that waited on `b` may be free now.
+        // The neighbours' corners changed: one that turned convex no longer blocks ears.
+        let mut woken = vec![b];
+        for w in [a, c] {
+            let now = not_convex(w, &prev, &next);
+            if reflex[w] && !now {
+                grid.remove(w, p2[w]);
+                woken.push(w);
+            } else if !reflex[w] && now {
+                grid.insert(w, p2[w]); // only on degenerate input
+            }
+            reflex[w] = now;
+        }
+        // The two neighbours have new ears; the ears that waited on a corner gone from the
+        // grid may be free now.
         for w in [a, c] {
             version[w] += 1;
-            evaluate(w, &prev, &next, &alive, remaining, &version, &grid, &mut blocked, &mut heap);
+            evaluate(w, &prev, &next, remaining, &version, &grid, &mut blocked, &mut heap);
         }
-        for (e, ev) in std::mem::take(&mut blocked[b]) {
-            let e = e as usize;
-            if alive[e] && version[e] == ev && e != a && e != c {
-                version[e] += 1;
-                evaluate(e, &prev, &next, &alive, remaining, &version, &grid, &mut blocked, &mut heap);
+        for g in woken {
+            for (e, ev) in std::mem::take(&mut blocked[g]) {
+                let e = e as usize;
+                if alive[e] && version[e] == ev {
+                    version[e] += 1;
+                    evaluate(e, &prev, &next, remaining, &version, &grid, &mut blocked, &mut heap);
+                }
             }
         }
     }
@@ -237,8 +265,8 @@ fn ear_clip(p2: &[[f64; 2]], taken: &mut impl FnMut(usize, usize) -> bool) -> Ve
     out
 }
 
-/// A uniform grid over the remaining corners of a projected polygon, about one corner per
-/// cell, for the question "does another corner lie in this ear?".
+/// A uniform grid over the remaining corners that are not strictly convex, about one cell
+/// per corner of the polygon, for the question "does a corner lie in this ear?".
 struct Grid {
     /// Larger side of the polygon's bounding box.
     extent: f64,
@@ -248,10 +276,14 @@ struct Grid {
     nx: usize,
     ny: usize,
     cells: Vec<Vec<u32>>,
+    /// The corners in the grid, and the position of each in that list.
+    members: Vec<u32>,
+    position: Vec<u32>,
 }
 
 impl Grid {
-    fn new(p2: &[[f64; 2]]) -> Self {
+    /// The grid of the corners `p2[i]` with `member[i]`.
+    fn new(p2: &[[f64; 2]], member: &[bool]) -> Self {
         let n = p2.len();
         let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
         for p in p2 {
@@ -269,10 +301,20 @@ impl Grid {
         } else {
             (1, 1, 0.0)
         };
-        let mut grid = Grid { extent: w.max(h), origin: lo, inv, nx, ny, cells: vec![Vec::new(); nx * ny] };
+        let mut grid = Grid {
+            extent: w.max(h),
+            origin: lo,
+            inv,
+            nx,
+            ny,
+            cells: vec![Vec::new(); nx * ny],
+            members: Vec::new(),
+            position: vec![u32::MAX; n],
+        };
         for (i, &p) in p2.iter().enumerate() {
-            let k = grid.cell(p);
-            grid.cells[k].push(i as u32);
+            if member[i] {
+                grid.insert(i, p);
+            }
         }
         grid
     }
@@ -295,43 +337,42 @@ impl Grid {
         y * self.nx + x
     }
 
+    fn insert(&mut self, i: usize, p: [f64; 2]) {
+        if self.position[i] != u32::MAX {
+            return;
+        }
+        let k = self.cell(p);
+        self.cells[k].push(i as u32);
+        self.position[i] = self.members.len() as u32;
+        self.members.push(i as u32);
+    }
+
     fn remove(&mut self, i: usize, p: [f64; 2]) {
+        let at = self.position[i];
+        if at == u32::MAX {
+            return;
+        }
         let k = self.cell(p);
         if let Some(pos) = self.cells[k].iter().position(|&j| j as usize == i) {
             self.cells[k].swap_remove(pos);
         }
+        self.members.swap_remove(at as usize);
+        if let Some(&moved) = self.members.get(at as usize) {
+            self.position[moved as usize] = at;
+        }
+        self.position[i] = u32::MAX;
     }
 
-    /// A remaining corner for which `inside` holds among those that can lie within `near` of
-    /// the triangle `a b c`: the corners of the grid cells its bounding box (grown by `near`)
-    /// meets, or, when those cells outnumber the `remaining` corners, the ring from `start`
-    /// (by `next`).
-    #[allow(clippy::too_many_arguments)]
-    fn find(
-        &self,
-        a: [f64; 2],
-        b: [f64; 2],
-        c: [f64; 2],
-        near: f64,
-        inside: &impl Fn(usize) -> bool,
-        start: usize,
-        next: &[usize],
-        alive: &[bool],
-        remaining: usize,
-    ) -> Option<usize> {
+    /// A corner of the grid for which `inside` holds among those that can lie within `near`
+    /// of the triangle `a b c`: the corners of the cells its bounding box (grown by `near`)
+    /// meets, or all of them when those cells outnumber them.
+    fn find(&self, a: [f64; 2], b: [f64; 2], c: [f64; 2], near: f64, inside: &impl Fn(usize) -> bool) -> Option<usize> {
         let lo = [a[0].min(b[0]).min(c[0]) - near, a[1].min(b[1]).min(c[1]) - near];
         let hi = [a[0].max(b[0]).max(c[0]) + near, a[1].max(b[1]).max(c[1]) + near];
         let (x0, y0) = self.coords(lo);
         let (x1, y1) = self.coords(hi);
-        if (x1 - x0 + 1) * (y1 - y0 + 1) > remaining {
-            let mut o = start;
-            for _ in 0..remaining {
-                if alive[o] && inside(o) {
-                    return Some(o);
-                }
-                o = next[o];
-            }
-            return None;
+        if (x1 - x0 + 1) * (y1 - y0 + 1) > self.members.len() {
+            return self.members.iter().map(|&o| o as usize).find(|&o| inside(o));
         }
         for y in y0..=y1 {
             for cell in &self.cells[y * self.nx + x0..=y * self.nx + x1] {
