@@ -1,4 +1,5 @@
-//! n-gon triangulation by ear clipping in the polygon's own plane (concave polygons too).
+//! n-gon triangulation by ear clipping in the polygon's own plane (concave polygons too),
+//! O(n log n) for n corners in practice (a heap of ears, a linked ring, a grid of corners).
 
 use crate::geometry::{cross, dot, norm};
 
@@ -10,6 +11,13 @@ use crate::geometry::{cross, dot, norm};
 /// (largest) minimum angle is cut, which keeps quads split along the better diagonal.
 /// Degenerate or self-intersecting input never fails: when no valid ear exists the rest is
 /// fanned, so the result always has exactly `n - 2` triangles covering every corner.
+///
+/// Paper: ear clipping rests on the two-ears theorem (G. H. Meisters, "Polygons have ears",
+/// Amer. Math. Monthly 82, 1975). Cost: about O(n log n) for n corners spread over the
+/// polygon's bounding box (a heap of ears, a linked ring and a grid of corners; see
+/// `ear_clip`), so a face of thousands of corners triangulates in milliseconds; adversarial
+/// shapes (many corners crowded into a few ears' boxes) can still cost up to O(n²).
+/// Preconditions: finite positions. Failures: none (see above).
 pub fn triangulate_polygon(pts: &[[f64; 3]]) -> Vec<[usize; 3]> {
     triangulate_polygon_avoiding(pts, |_, _| false)
 }
@@ -86,57 +94,305 @@ pub fn triangulate_polygon_with(
             return tris.to_vec();
         }
     }
-    let mut idx: Vec<usize> = (0..n).collect();
+    ear_clip(&p2, &mut taken)
+}
+
+/// Quantum of the ear quality (radians): ears whose qualities round to the same multiple are
+/// tied, and a tie goes to the smaller corner index, so the choice does not depend on
+/// round-off (rectangles, regular polygons) or on where the polygon lies.
+const QUALITY_QUANTUM: f64 = 1e-9;
+
+/// A corner turning by less than this (the sine of its turning angle) is straight, not an ear:
+/// corners collinear in 3D are so only to round-off once projected, and an ear there would
+/// be a triangle of zero area.
+const COLLINEAR: f64 = 1e-10;
+
+/// A corner within this fraction of the polygon's extent from an ear's sides counts as in the
+/// ear, for the same reason: a corner on the diagonal of an ear (a collinear run) would
+/// otherwise leave a zero-area triangle behind.
+const NEAR: f64 = 1e-10;
+
+/// Ear clipping of the projected polygon `p2` (module docs of [`triangulate_polygon_with`]).
+///
+/// Cost about O(k log k) for k corners on polygons whose corners are spread over their
+/// bounding box (O(k²) at worst on adversarial ones), instead of the O(k³) of rescanning
+/// every ear against every corner after each cut:
+/// * the remaining corners form a doubly linked ring, so a cut is O(1);
+/// * the ears sit in a max-heap by quality (the minimum angle, a taken diagonal ranking below
+///   every free one), with a version per corner that invalidates the entries of a corner whose
+///   neighbours changed: the best ear of the current ring is popped, exactly as a full rescan
+///   would pick it;
+/// * whether another corner lies in an ear is asked of a uniform grid over the remaining
+///   corners that are not strictly convex (only they can lie in an ear of a simple polygon:
+///   if any corner does, the one of the intruding chain farthest from the ear's diagonal is
+///   reflex), or of their list when the ear's bounding box covers more cells than they are;
+///   a convex polygon's ears are then tested in O(1);
+/// * an ear that holds a corner waits on that corner ("blocked by it"): vertices never move,
+///   so the ear stays invalid until that corner turns convex or is cut, and is evaluated
+///   again only then.
+///
+/// On a simple polygon the same ears are valid as in the exhaustive test (a convex corner
+/// whose triangle holds no other remaining corner, boundary included, within round-off), so
+/// the result is the same triangulation up to ties of quality within [`QUALITY_QUANTUM`]. When
+/// no valid ear is left (degenerate or self-intersecting input) every corner is evaluated once
+/// more, and then the rest is fanned.
+fn ear_clip(p2: &[[f64; 2]], taken: &mut impl FnMut(usize, usize) -> bool) -> Vec<[usize; 3]> {
+    use std::cmp::Reverse;
+    use std::collections::BinaryHeap;
+    let n = p2.len();
+    let mut prev: Vec<usize> = (0..n).map(|i| (i + n - 1) % n).collect();
+    let mut next: Vec<usize> = (0..n).map(|i| (i + 1) % n).collect();
+    let mut alive = vec![true; n];
+    let mut version = vec![0u32; n];
+    let mut remaining = n;
+    // Corners that are not strictly convex: only they can lie in an ear of a simple polygon
+    // (if any corner does, the corner of the intruding chain farthest from the ear's diagonal
+    // is one of them).
+    let not_convex = |b: usize, prev: &[usize], next: &[usize]| {
+        let (pa, pb, pc) = (p2[prev[b]], p2[b], p2[next[b]]);
+        let area2 = (pb[0] - pa[0]) * (pc[1] - pa[1]) - (pb[1] - pa[1]) * (pc[0] - pa[0]);
+        let (ab, bc) = ((pb[0] - pa[0]).hypot(pb[1] - pa[1]), (pc[0] - pb[0]).hypot(pc[1] - pb[1]));
+        !(area2 > COLLINEAR * ab * bc)
+    };
+    let mut reflex: Vec<bool> = (0..n).map(|b| not_convex(b, &prev, &next)).collect();
+    let mut grid = Grid::new(p2, &reflex);
+    // Corners closer than this to an ear's sides count as in it (round-off of the projection).
+    let near = NEAR * grid.extent;
+    // Ears waiting on the corner that lies in them: (ear corner, its version then).
+    let mut blocked: Vec<Vec<(u32, u32)>> = vec![Vec::new(); n];
+    let mut heap: BinaryHeap<(i64, Reverse<u32>, u32)> = BinaryHeap::new();
     let mut out = Vec::with_capacity(n - 2);
-    while idx.len() > 3 {
-        let m = idx.len();
-        let mut best: Option<(usize, f64)> = None;
-        for k in 0..m {
-            let (a, b, c) = (idx[(k + m - 1) % m], idx[k], idx[(k + 1) % m]);
-            let (pa, pb, pc) = (p2[a], p2[b], p2[c]);
-            let area2 = (pb[0] - pa[0]) * (pc[1] - pa[1]) - (pb[1] - pa[1]) * (pc[0] - pa[0]);
-            if area2 <= 0.0 {
-                continue; // reflex or degenerate corner
+
+    // Evaluate corner `b` as an ear with its current neighbours: into the heap when valid, onto
+    // the blocking corner's list when another corner lies in it, nowhere when not convex.
+    let mut evaluate = |b: usize,
+                        prev: &[usize],
+                        next: &[usize],
+                        remaining: usize,
+                        version: &[u32],
+                        grid: &Grid,
+                        blocked: &mut [Vec<(u32, u32)>],
+                        heap: &mut BinaryHeap<(i64, Reverse<u32>, u32)>| {
+        if not_convex(b, prev, next) {
+            return; // reflex, or straight to round-off (collinear corners of a 3D face)
+        }
+        let (a, c) = (prev[b], next[b]);
+        let (pa, pb, pc) = (p2[a], p2[b], p2[c]);
+        let inside = |o: usize| o != a && o != b && o != c && point_near_triangle(p2[o], pa, pb, pc, near);
+        if let Some(o) = grid.find(pa, pb, pc, near, &inside) {
+            blocked[o].push((b as u32, version[b]));
+            return;
+        }
+        // A taken diagonal ranks below every free one.
+        let q = min_angle_2d(pa, pb, pc) - if remaining > 3 && taken(a, c) { 10.0 } else { 0.0 };
+        heap.push(((q / QUALITY_QUANTUM).round() as i64, Reverse(b as u32), version[b]));
+    };
+
+    for b in 0..n {
+        evaluate(b, &prev, &next, remaining, &version, &grid, &mut blocked, &mut heap);
+    }
+    let mut rescanned = false;
+    while remaining > 3 {
+        let Some((_, Reverse(b), v)) = heap.pop() else {
+            // No ear known. Cannot happen for a simple polygon (every one of more than three
+            // corners has two ears, and every ear is in the heap or waits on a corner still
+            // there); for degenerate input, evaluate every corner once more, then give up.
+            if rescanned {
+                break;
             }
-            // No other remaining vertex inside the ear.
-            let inside = idx.iter().any(|&o| {
-                o != a && o != b && o != c && point_in_triangle(p2[o], pa, pb, pc)
-            });
-            if inside {
-                continue;
+            rescanned = true;
+            let mut b = (0..n).find(|&i| alive[i]).expect("corners remain");
+            for _ in 0..remaining {
+                version[b] += 1;
+                evaluate(b, &prev, &next, remaining, &version, &grid, &mut blocked, &mut heap);
+                b = next[b];
             }
-            // A taken diagonal ranks below every free one.
-            let q = min_angle_2d(pa, pb, pc) - if idx.len() > 3 && taken(a, c) { 10.0 } else { 0.0 };
-            // Strictly better by a relative margin: ties (rectangles) resolve the same way
-            // under rigid motions and round-off.
-            if best.is_none_or(|(_, bq)| q > bq + 1e-9 * bq.abs() + 1e-300) {
-                best = Some((k, q));
+            continue;
+        };
+        let b = b as usize;
+        if !alive[b] || version[b] != v {
+            continue; // stale: cut already, or its neighbours changed
+        }
+        rescanned = false;
+        let (a, c) = (prev[b], next[b]);
+        out.push([a, b, c]);
+        alive[b] = false;
+        if reflex[b] {
+            grid.remove(b, p2[b]);
+        }
+        remaining -= 1;
+        next[a] = c;
+        prev[c] = a;
+        // The neighbours' corners changed: one that turned convex no longer blocks ears.
+        let mut woken = vec![b];
+        for w in [a, c] {
+            let now = not_convex(w, &prev, &next);
+            if reflex[w] && !now {
+                grid.remove(w, p2[w]);
+                woken.push(w);
+            } else if !reflex[w] && now {
+                grid.insert(w, p2[w]); // only on degenerate input
+            }
+            reflex[w] = now;
+        }
+        // The two neighbours have new ears; the ears that waited on a corner gone from the
+        // grid may be free now.
+        for w in [a, c] {
+            version[w] += 1;
+            evaluate(w, &prev, &next, remaining, &version, &grid, &mut blocked, &mut heap);
+        }
+        for g in woken {
+            for (e, ev) in std::mem::take(&mut blocked[g]) {
+                let e = e as usize;
+                if alive[e] && version[e] == ev {
+                    version[e] += 1;
+                    evaluate(e, &prev, &next, remaining, &version, &grid, &mut blocked, &mut heap);
+                }
             }
         }
-        let k = match best {
-            Some((k, _)) => k,
-            None => {
-                // No valid ear (degenerate / self-intersecting): fan the rest.
-                for i in 1..idx.len() - 1 {
-                    out.push([idx[0], idx[i], idx[i + 1]]);
-                }
-                return out;
-            }
-        };
-        let m = idx.len();
-        out.push([idx[(k + m - 1) % m], idx[k], idx[(k + 1) % m]]);
-        idx.remove(k);
     }
-    out.push([idx[0], idx[1], idx[2]]);
+    // The last triangle, or the fan of what no ear could cut, from the smallest corner left.
+    let first = (0..n).find(|&i| alive[i]).expect("corners remain");
+    let mut ring = Vec::with_capacity(remaining);
+    let mut b = first;
+    for _ in 0..remaining {
+        ring.push(b);
+        b = next[b];
+    }
+    for i in 1..ring.len() - 1 {
+        out.push([ring[0], ring[i], ring[i + 1]]);
+    }
     out
 }
 
-fn point_in_triangle(p: [f64; 2], a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> bool {
-    let s = |u: [f64; 2], v: [f64; 2], w: [f64; 2]| (v[0] - u[0]) * (w[1] - u[1]) - (v[1] - u[1]) * (w[0] - u[0]);
-    let d1 = s(a, b, p);
-    let d2 = s(b, c, p);
-    let d3 = s(c, a, p);
-    d1 >= 0.0 && d2 >= 0.0 && d3 >= 0.0
+/// A uniform grid over the remaining corners that are not strictly convex, about one cell
+/// per corner of the polygon, for the question "does a corner lie in this ear?".
+struct Grid {
+    /// Larger side of the polygon's bounding box.
+    extent: f64,
+    origin: [f64; 2],
+    /// Reciprocal of the cell size.
+    inv: f64,
+    nx: usize,
+    ny: usize,
+    cells: Vec<Vec<u32>>,
+    /// The corners in the grid, and the position of each in that list.
+    members: Vec<u32>,
+    position: Vec<u32>,
+}
+
+impl Grid {
+    /// The grid of the corners `p2[i]` with `member[i]`.
+    fn new(p2: &[[f64; 2]], member: &[bool]) -> Self {
+        let n = p2.len();
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for p in p2 {
+            for d in 0..2 {
+                lo[d] = lo[d].min(p[d]);
+                hi[d] = hi[d].max(p[d]);
+            }
+        }
+        let (w, h) = (hi[0] - lo[0], hi[1] - lo[1]);
+        // Cell size for about n cells over the box (a thin box gets a single row).
+        let size = ((w * h) / n as f64).sqrt().max(w.max(h) / n as f64);
+        let (nx, ny, inv) = if size > 0.0 && size.is_finite() {
+            let cells = |e: f64| ((e / size).floor() as usize + 1).min(n);
+            (cells(w), cells(h), 1.0 / size)
+        } else {
+            (1, 1, 0.0)
+        };
+        let mut grid = Grid {
+            extent: w.max(h),
+            origin: lo,
+            inv,
+            nx,
+            ny,
+            cells: vec![Vec::new(); nx * ny],
+            members: Vec::new(),
+            position: vec![u32::MAX; n],
+        };
+        for (i, &p) in p2.iter().enumerate() {
+            if member[i] {
+                grid.insert(i, p);
+            }
+        }
+        grid
+    }
+
+    /// Column and row of the cell of `p` (clamped to the grid).
+    fn coords(&self, p: [f64; 2]) -> (usize, usize) {
+        let f = |x: f64, o: f64, m: usize| {
+            let c = (x - o) * self.inv;
+            if c >= 0.0 {
+                (c as usize).min(m - 1)
+            } else {
+                0
+            }
+        };
+        (f(p[0], self.origin[0], self.nx), f(p[1], self.origin[1], self.ny))
+    }
+
+    fn cell(&self, p: [f64; 2]) -> usize {
+        let (x, y) = self.coords(p);
+        y * self.nx + x
+    }
+
+    fn insert(&mut self, i: usize, p: [f64; 2]) {
+        if self.position[i] != u32::MAX {
+            return;
+        }
+        let k = self.cell(p);
+        self.cells[k].push(i as u32);
+        self.position[i] = self.members.len() as u32;
+        self.members.push(i as u32);
+    }
+
+    fn remove(&mut self, i: usize, p: [f64; 2]) {
+        let at = self.position[i];
+        if at == u32::MAX {
+            return;
+        }
+        let k = self.cell(p);
+        if let Some(pos) = self.cells[k].iter().position(|&j| j as usize == i) {
+            self.cells[k].swap_remove(pos);
+        }
+        self.members.swap_remove(at as usize);
+        if let Some(&moved) = self.members.get(at as usize) {
+            self.position[moved as usize] = at;
+        }
+        self.position[i] = u32::MAX;
+    }
+
+    /// A corner of the grid for which `inside` holds among those that can lie within `near`
+    /// of the triangle `a b c`: the corners of the cells its bounding box (grown by `near`)
+    /// meets, or all of them when those cells outnumber them.
+    fn find(&self, a: [f64; 2], b: [f64; 2], c: [f64; 2], near: f64, inside: &impl Fn(usize) -> bool) -> Option<usize> {
+        let lo = [a[0].min(b[0]).min(c[0]) - near, a[1].min(b[1]).min(c[1]) - near];
+        let hi = [a[0].max(b[0]).max(c[0]) + near, a[1].max(b[1]).max(c[1]) + near];
+        let (x0, y0) = self.coords(lo);
+        let (x1, y1) = self.coords(hi);
+        if (x1 - x0 + 1) * (y1 - y0 + 1) > self.members.len() {
+            return self.members.iter().map(|&o| o as usize).find(|&o| inside(o));
+        }
+        for y in y0..=y1 {
+            for cell in &self.cells[y * self.nx + x0..=y * self.nx + x1] {
+                if let Some(&o) = cell.iter().find(|&&o| inside(o as usize)) {
+                    return Some(o as usize);
+                }
+            }
+        }
+        None
+    }
+}
+
+/// Whether `p` lies in the counter-clockwise triangle `a b c` or within `near` of it (on the
+/// inner side of every side's line shifted outward by `near`).
+fn point_near_triangle(p: [f64; 2], a: [f64; 2], b: [f64; 2], c: [f64; 2], near: f64) -> bool {
+    let s = |u: [f64; 2], v: [f64; 2]| {
+        let len = (v[0] - u[0]).hypot(v[1] - u[1]);
+        (v[0] - u[0]) * (p[1] - u[1]) - (v[1] - u[1]) * (p[0] - u[0]) >= -near * len
+    };
+    s(a, b) && s(b, c) && s(c, a)
 }
 
 fn min_angle_2d(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {

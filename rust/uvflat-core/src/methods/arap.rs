@@ -23,6 +23,12 @@
 //! increases; the history returned by [`solve_with_history`] shows it. The iteration stops
 //! after `max_iterations` or when the relative energy change falls below `tolerance`.
 //!
+//! Pins: with two or more pinned vertices at distinct UVs they are the fixed values of every
+//! global step (they hold exactly), and the rest shapes are the 3D triangles scaled by the
+//! pins' scale ([`super::nonlinear::pins::pins_scale`]), so the unpinned part lies at the
+//! pins' scale rather than at 3D scale around them; with one pin the chart is solved free and
+//! held at its LSCM position, which is translated onto the pin.
+//!
 //! No injectivity guarantee: ARAP can fold triangles (the report counts flips).
 //!
 //! Preconditions: a disk chart, possibly with holes. Degenerate 3D triangles get a thin valid
@@ -73,7 +79,11 @@ pub fn solve_with_history(
     let tris = &chart.triangles;
     let angles = chart_angles(&chart.positions, tris);
     let (mut uv, pin_note) = lscm::solve_with_angles(chart, &angles, pins)?;
-    let ops = TriangleOperators::new(&chart.positions, tris);
+    // Pins spanning more than a point fix the map's scale: the rest shapes are the 3D ones at
+    // that scale, so the unpinned part is laid out at the pins' scale (module docs).
+    let (rest, scale) = super::nonlinear::pins::rest_positions(chart, pins);
+    let ops = TriangleOperators::new(&rest, tris);
+    drop(rest);
 
     // Global matrix Σ A_f L_f over n unknowns (the same for u and v), lower triangle.
     let mut trip = Vec::with_capacity(tris.len() * 6);
@@ -140,7 +150,7 @@ pub fn solve_with_history(
     if let Some(reason) = stopped {
         note = format!("{note}; {}", stopped_early_note(&reason));
     }
-    if let Some(p) = pin_note {
+    if let Some(p) = pin_note.or_else(|| super::nonlinear::pins::pins_scale_note(pins.len(), scale)) {
         note = format!("{note}; {p}");
     }
     let sol = ChartSolution { uv, iterations, residual: change, note: Some(note), fallback: None };

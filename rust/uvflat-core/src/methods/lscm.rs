@@ -178,11 +178,8 @@ pub fn solve_with_angles(
     let s = LscmSolver::with_ordering(n, &chart.triangles, angles, &[auto[0].0, auto[1].0], chart.ordering_if_known(OrderingKind::Amd))?;
     let mut uv = s.solve(&[auto[0].1, auto[1].1])?;
     let mut note = None;
-    if let Some(&(v, target)) = pins.first() {
-        let d = [target[0] - uv[v as usize][0], target[1] - uv[v as usize][1]];
-        for p in uv.iter_mut() {
-            *p = [p[0] + d[0], p[1] + d[1]];
-        }
+    if pins.first().is_some() {
+        super::nonlinear::pins::translate_onto_first_pin(&mut uv, pins);
         note = Some(if pins.len() == 1 {
             "one pinned vertex: the chart was translated onto it".to_string()
         } else {

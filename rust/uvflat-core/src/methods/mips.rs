@@ -32,18 +32,25 @@
 //! every quad ([`super::barrier_triangles`]), so quads stay strictly convex; an LSCM start
 //! with a non-convex quad is not used.
 //!
-//! Pins: the energy does not see them; the result is moved onto the pins by the least-squares
-//! similarity (exact for one or two pins) and the report says so.
+//! Pins: with two or more pinned vertices at distinct UVs the pins replace the gauge: they are
+//! fixed values of every Newton step (the line search moves only the free vertices), so they
+//! hold exactly, and the start honours them (pinned LSCM, else the pinned mean value map).
+//! The energy is scale invariant, so the pins set the scale. A single pin is reached by
+//! translating the result (exact).
 //!
 //! Failures: a chart that is not a disk (see [`super::require_disk`]); a singular start or
 //! Newton system becomes a chart failure. A start with a degenerate UV triangle (infinite
-//! energy) returns the mean value map as a fallback.
+//! energy) returns the mean value map as a fallback; with pins and no flip-free start honouring
+//! them, the chart falls back to a pinned map
+//! ([`super::nonlinear::pins::pinned_fallback`]), which holds the pins.
 
 use super::nonlinear::hessian::{mips_derivatives, project_psd4};
 use super::nonlinear::iterate::{quads_left_out_note, Change, Iteration};
 use super::nonlinear::jacobian::flat;
 use super::nonlinear::pattern::{block_triplets, by_component, BLOCK};
-use super::nonlinear::pins::gauge_vertices;
+use super::lscm::pins_span;
+use super::nonlinear::pins::{gauge_vertices, pinned_fallback, translate_onto_first_pin, translate_onto_single_pin};
+use super::nonlinear::start::mean_value_start;
 use super::nonlinear::TriangleOperators;
 use super::{ChartFailure, ChartSolution, Fallback};
 use crate::charts::Chart;
@@ -52,7 +59,6 @@ use crate::solvers::{FixedValueSolver, SolveError, Symmetry};
 use rayon::prelude::*;
 
 pub use super::nonlinear::energy::{mips_density, mips_energy};
-pub(crate) use super::nonlinear::pins::honour_pins_by_similarity;
 pub(crate) use super::nonlinear::start::flip_free_start;
 
 /// Options of [`solve`].
@@ -85,20 +91,31 @@ pub fn solve_with_history(
     super::require_disk(chart)?;
     let n = chart.positions.len();
     let chart_ops = TriangleOperators::local_frames(&chart.positions, &chart.triangles);
+    // Pins spanning more than a point are fixed values of every Newton step, so the start must
+    // honour them too; a single pin is reached by a translation at the end.
+    let spanning = pins_span(pins);
+    let start_pins: &[(u32, [f64; 2])] = if spanning { pins } else { &[] };
+    let valid = |uv: &[[f64; 2]]| {
+        all_positive(&chart.triangles, uv) && mips_energy(&chart_ops, &chart.triangles, uv).is_finite() && super::nonconvex_quads(chart, uv) == 0
+    };
     // LSCM minimises a conformal energy too, so when it is flip-free (quads strictly convex
     // included) it starts Newton next to the MIPS minimiser; otherwise the mean value map,
-    // flip-free with convex quads by Floater's theorem on the polygon graph.
-    let lscm_start = super::lscm::solve_with_angles(chart, &super::chart_angles(&chart.positions, &chart.triangles), &[])
+    // flip-free with convex quads by Floater's theorem on the polygon graph (with pins only
+    // when they are consistent enough).
+    let lscm_start = super::lscm::solve_with_angles(chart, &super::chart_angles(&chart.positions, &chart.triangles), start_pins)
         .ok()
         .map(|(uv, _)| uv)
-        .filter(|uv| {
-            all_positive(&chart.triangles, uv)
-                && mips_energy(&chart_ops, &chart.triangles, uv).is_finite()
-                && super::nonconvex_quads(chart, uv) == 0
-        });
+        .filter(|uv| valid(uv));
     let start_name = if lscm_start.is_some() { "lscm" } else { "mean_value" };
     let mut uv = match lscm_start {
         Some(uv) => uv,
+        None if spanning => match mean_value_start(chart, pins).map(|s| s.uv) {
+            Ok(uv) if valid(&uv) => uv,
+            _ => {
+                let sol = pinned_fallback(chart, pins, "no flip-free starting map honours the pins; MIPS needs one")?;
+                return Ok((sol, Vec::new()));
+            }
+        },
         None => flip_free_start(chart)?,
     };
     // The barrier covers both diagonal splits of every quad (see `barrier_triangles`).
@@ -108,6 +125,7 @@ pub fn solve_with_history(
     let energy = mips_energy(&ops, tris, &uv);
     if !energy.is_finite() {
         let mut sol = ChartSolution::direct(uv);
+        translate_onto_first_pin(&mut sol.uv, pins);
         sol.fallback = Some(Fallback {
             method: "mean_value",
             reason: "the flip-free start has a degenerate UV triangle, so the MIPS energy is infinite".into(),
@@ -119,8 +137,14 @@ pub fn solve_with_history(
     // (u0, u1, u2, v0, v1, v2), then the diagonal.
     let mut triplets = block_triplets(tris, by_component);
     triplets.extend((0..2 * n as u32).map(|i| (i, i, 1.0)));
-    let [g0, g1] = gauge_vertices(chart, &uv);
-    let fixed: Vec<u32> = if g0 == g1 { vec![2 * g0, 2 * g0 + 1] } else { vec![2 * g0, 2 * g0 + 1, 2 * g1, 2 * g1 + 1] };
+    // The gauge: the pins when they span more than a point (they never move), else two
+    // far-apart boundary vertices (the energy is similarity invariant).
+    let fixed: Vec<u32> = if spanning {
+        pins.iter().flat_map(|p| [2 * p.0, 2 * p.0 + 1]).collect()
+    } else {
+        let [g0, g1] = gauge_vertices(chart, &uv);
+        if g0 == g1 { vec![2 * g0, 2 * g0 + 1] } else { vec![2 * g0, 2 * g0 + 1, 2 * g1, 2 * g1 + 1] }
+    };
     let mut solver = FixedValueSolver::new(2 * n, &triplets, &fixed, Symmetry::Symmetric)?;
     let mut values = vec![0.0; triplets.len()];
     let mut grad = vec![0.0; 2 * n];
@@ -205,7 +229,8 @@ pub fn solve_with_history(
     if let Some(q) = quads_left_out_note(left_out) {
         started = format!("{started}; {q}");
     }
-    sol.note = Some(match honour_pins_by_similarity(&mut sol.uv, pins, "MIPS") {
+    let pinned = if spanning { Some(format!("{} pinned vertex(es) held fixed", pins.len())) } else { translate_onto_single_pin(&mut sol.uv, pins, "MIPS") };
+    sol.note = Some(match pinned {
         Some(pinned) => format!("{started}; {pinned}"),
         None => started,
     });

@@ -53,8 +53,11 @@
 //! Guarantee: every triangle of the result is positively oriented (the start is checked and
 //! every accepted step keeps it so); the energy history is strictly decreasing.
 //!
-//! Pins: pinned vertices are fixed in every global step. With pins spanning more than a point,
-//! the start honours them too (pinned LSCM or pinned mean value); when neither pinned start is
+//! Pins: pinned vertices are fixed in every global step and every Newton step, so they hold
+//! exactly. With pins spanning more than a point, the start honours them too (pinned LSCM or
+//! pinned mean value), and the energy's rest shapes are the 3D triangles scaled by the pins'
+//! scale ([`super::nonlinear::pins::pins_scale`]): the unpinned part lies at the pins' scale,
+//! as in Blender's Minimum Stretch, not at 3D scale around them. When neither pinned start is
 //! flip-free, no flip-free map with those pins is known and the chart falls back to pinned
 //! LSCM, saying so ([`ChartSolution::fallback`]).
 //!
@@ -309,7 +312,10 @@ pub(crate) const INEXACT: f64 = 1e-3;
 fn solve_timed(chart: &Chart, pins: &[(u32, [f64; 2])], options: &SlimOptions, timed: bool) -> Result<(ChartSolution, SlimHistory), ChartFailure> {
     let clock = Clock(timed);
     let n = chart.positions.len();
-    let ops = TriangleOperators::new(&chart.positions, &chart.triangles);
+    // Pins spanning more than a point fix the map's scale: the energy is measured against the
+    // 3D shape at that scale (module docs).
+    let (rest, scale) = super::nonlinear::pins::rest_positions(chart, pins);
+    let ops = TriangleOperators::new(&rest, &chart.triangles);
     let t_start = clock.now();
     // The global step's system is analysed beside the start for mid-sized charts, over the
     // barrier of a start that leaves no quad out (the usual case; see below).
@@ -341,10 +347,11 @@ fn solve_timed(chart: &Chart, pins: &[(u32, [f64; 2])], options: &SlimOptions, t
     let (tris, ops) = if chart.quads.is_empty() {
         (&chart.triangles, ops)
     } else {
-        let ops = ops.extended(&chart.positions, &barrier).weighted(&weights);
+        let ops = ops.extended(&rest, &barrier).weighted(&weights);
         energy = symmetric_dirichlet(&ops, &barrier, &uv);
         (&barrier, ops)
     };
+    drop(rest);
     let mut history = SlimHistory { start: start_name, start_seconds, ..Default::default() };
 
     // Fixed pattern: per triangle the 21 lower-triangle entries of its 6 × 6 block over
@@ -495,6 +502,9 @@ fn solve_timed(chart: &Chart, pins: &[(u32, [f64; 2])], options: &SlimOptions, t
     }
     if let Some(q) = quads_left_out_note(left_out) {
         note = format!("{note}; {q}");
+    }
+    if let Some(p) = super::nonlinear::pins::pins_scale_note(pins.len(), scale) {
+        note = format!("{note}; {p}");
     }
     let sol = ChartSolution { uv, iterations, residual: change, note: Some(note), fallback: None };
     Ok((sol, history))

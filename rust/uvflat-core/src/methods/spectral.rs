@@ -146,11 +146,8 @@ pub fn solve(chart: &Chart, pins: &[(u32, [f64; 2])], options: &SpectralOptions)
     }
     let mut uv: Vec<[f64; 2]> = (0..n).map(|i| [x[2 * i], x[2 * i + 1]]).collect();
     let mut note = None;
-    if let Some(&(v, p)) = pins.first() {
-        let d = [p[0] - uv[v as usize][0], p[1] - uv[v as usize][1]];
-        for u in uv.iter_mut() {
-            *u = [u[0] + d[0], u[1] + d[1]];
-        }
+    if pins.first().is_some() {
+        super::nonlinear::pins::translate_onto_first_pin(&mut uv, pins);
         note = Some("one pinned vertex: the chart was translated onto it".into());
     }
     let mut s = ChartSolution::direct(uv);

@@ -111,9 +111,16 @@
 //! below `tolerance`. Chord steps are not used with inequalities. The result: every outer
 //! sum ≤ cap + residual < π.
 //!
+//! Regularisation: a reduced ABF++ matrix that fails Cholesky (near-degenerate corners, or
+//! vertex rows nearly dependent on irregular boundaries) gets its diagonal shifted and is
+//! factored again (`reduced.rs`), so the iteration goes on; the report notes it.
+//!
 //! Failure modes: no convergence within `max_iterations` Newton steps,
-//! a singular or indefinite linear system, or solved angles outside (0, π). [`solve`] then
-//! falls back to plain LSCM with the 3D angles and says why in [`ChartSolution::fallback`].
+//! a linear system that cannot be factored even so, or solved angles outside (0, π); and, on
+//! a disk without holes or pins, a layout with a flipped triangle. [`solve`] then falls back
+//! to LSCM with the 3D angles when that has no flip and a moderate area distortion
+//! ([`FALLBACK_AREA_LIMIT`]), else to SLIM (flip-free) when it has fewer flips or less area
+//! distortion, and says why in [`ChartSolution::fallback`] ([`solve_with_sums`]).
 //!
 //! Preconditions: a chart that is a disk (possibly with holes). Holes with a free boundary
 //! are left open, as in the papers, and their angles are not constrained to close up, so the
@@ -262,6 +269,11 @@ pub struct AbfAngles {
     /// Outer-boundary vertices whose angle sum ended within 1e-6 of the cap [`convex_cap`]
     /// (convex boundary only), ascending.
     pub convex_active: Vec<u32>,
+    /// Factorizations of the reduced ABF++ matrix that were not positive definite and were
+    /// regularised by a diagonal shift (see `reduced.rs`), and the largest shift used,
+    /// relative to the mean diagonal entry.
+    pub regularised: usize,
+    pub largest_shift: f64,
 }
 
 /// Solve the ABF angle problem of one chart (see the module docs).
@@ -389,13 +401,14 @@ fn solve_filled(chart: &Chart, options: &AbfOptions, prescribed: &[(u32, f64)]) 
     let run = newton(&p, &mut s, options).map_err(|e| ChartFailure(format!("abf: {e}")))?;
     let (iterations, factorizations, converged, residual, stationarity) =
         (run.iterations, run.factorizations, run.converged, run.residual, run.stationarity);
+    let (regularised, largest_shift) = (run.shifted, run.largest_shift);
     let sums = vertex_sums(chart, &s.alpha);
     let active = |v: usize| ineq[v] && sums[v] > cap - CONVEX_ACTIVE;
     let beta3: Vec<[f64; 3]> = p.beta.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
     drop(p);
     let alpha: Vec<[f64; 3]> = s.alpha.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
     let convex_active = (0..n as u32).filter(|&v| active(v as usize)).collect();
-    Ok(AbfAngles { alpha, beta: beta3, iterations, factorizations, residual, stationarity, converged, convex_active })
+    Ok(AbfAngles { alpha, beta: beta3, iterations, factorizations, residual, stationarity, converged, convex_active, regularised, largest_shift })
 }
 
 /// ABF / ABF++ of one chart: solve the angles, then reconstruct UVs with LSCM driven by them
@@ -457,6 +470,13 @@ pub fn validate_angle_sums(sums: &[(u32, f64)], corners: &[u32]) -> crate::error
 }
 
 /// [`solve`] with prescribed angle sums (see [`solve_angles_with_sums`]).
+///
+/// Fallbacks are flip-free where LSCM is not: when the angle solve fails, or when its layout
+/// folds a chart on which ABF promises no flips (a disk without holes and without pins; the
+/// least-squares layout of nearly consistent angles around near-degenerate corners can fold),
+/// the chart is mapped by LSCM with the 3D angles if that has no flipped triangle and a
+/// moderate area distortion, else by SLIM ([`super::slim`], flip-free by its line search) when
+/// it folds less or distorts area less (`flip_free_fallback`); the fallback's reason says why.
 pub fn solve_with_sums(
     chart: &Chart,
     pins: &[(u32, [f64; 2])],
@@ -468,6 +488,7 @@ pub fn solve_with_sums(
             let valid = a.alpha.iter().flatten().all(|&x| x > 0.0 && x < PI);
             if a.converged && valid {
                 let (uv, note) = lscm::solve_with_angles(chart, &a.alpha, pins)?;
+                let note = with_regularised_note(note, &a);
                 let open_holes = options.boundary == AbfBoundary::Free && chart.boundary_loops.len() > 1;
                 let open = if open_holes { lscm::folds(chart, &uv) } else { (0, false) };
                 if lscm::filling_may_help(chart, &uv, open) && prescribed_on_hole(chart, prescribed).is_none() {
@@ -477,7 +498,7 @@ pub fn solve_with_sums(
                         if b.converged && b.alpha.iter().flatten().all(|&x| x > 0.0 && x < PI) {
                             let (closed_uv, closed_note) = lscm::solve_with_angles(chart, &b.alpha, pins)?;
                             if lscm::folds(chart, &closed_uv) < open {
-                                let note = Some(lscm::holes_filled_note(open, closed_note));
+                                let note = with_regularised_note(Some(lscm::holes_filled_note(open, closed_note)), &b);
                                 return Ok(ChartSolution {
                                     uv: closed_uv,
                                     iterations: a.iterations + b.iterations,
@@ -489,21 +510,92 @@ pub fn solve_with_sums(
                         }
                     }
                 }
+                // Where ABF promises no flips, a folded layout is not returned as solved.
+                // (Quads are made convex afterwards, see `super::convex_quads_or_slim`.)
+                let flips = if chart.kind == crate::unwrap::ChartKind::Disk && pins.is_empty() { crate::metrics::count_flips(&chart.triangles, &uv) } else { 0 };
+                if flips > 0 {
+                    let why = format!("the ABF layout has {flips} flipped triangle(s) (residual {:.3e})", a.residual);
+                    let mut sol = flip_free_fallback(chart, pins, why)?;
+                    sol.iterations = a.iterations;
+                    return Ok(sol);
+                }
                 return Ok(ChartSolution { uv, iterations: a.iterations, residual: a.residual, note, fallback: None });
             }
             let what = if !a.converged { "did not converge" } else { "produced an angle outside (0, π)" };
-            let mut sol = lscm::solve(chart, pins)?;
+            let regularised = regularised_note(&a).map(|n| format!(" ({n})")).unwrap_or_default();
+            let mut sol = flip_free_fallback(chart, pins, format!("abf {what}: residual {:.3e} after {} iterations{regularised}", a.residual, a.iterations))?;
             sol.iterations = a.iterations;
             sol.residual = a.residual;
-            sol.fallback = Some(Fallback {
-                method: "lscm",
-                reason: format!("abf {what}: residual {:.3e} after {} iterations", a.residual, a.iterations),
-            });
             return Ok(sol);
         }
         Err(ChartFailure(r)) => r,
     };
+    flip_free_fallback(chart, pins, format!("abf failed: {reason}"))
+}
+
+/// Flipped triangles and folded quads of `uv`.
+fn count_flips(chart: &Chart, uv: &[[f64; 2]]) -> usize {
+    crate::metrics::count_flips_with_quads(&chart.triangles, &chart.quads, uv)
+}
+
+/// The report's words for a solve whose reduced matrix needed regularising, if it did.
+fn regularised_note(a: &AbfAngles) -> Option<String> {
+    (a.regularised > 0).then(|| {
+        format!(
+            "{} factorization(s) of the ABF++ system regularised by a diagonal shift of up to {:.0e} of its mean",
+            a.regularised, a.largest_shift
+        )
+    })
+}
+
+/// `note` with [`regularised_note`] appended.
+fn with_regularised_note(note: Option<String>, a: &AbfAngles) -> Option<String> {
+    match (note, regularised_note(a)) {
+        (Some(n), Some(r)) => Some(format!("{n}; {r}")),
+        (n, r) => n.or(r),
+    }
+}
+
+/// A fallback LSCM map whose area distortion ([`crate::metrics::Distortion::area`], 1 for
+/// an area-preserving map) is above this is compared with SLIM too: on charts far from
+/// developable (a cow cut along one ring: the angle solve stalls there) LSCM's conformal map
+/// shrinks whole parts to nothing (area distortion 10⁷ and more) while SLIM stays near 1–10.
+pub const FALLBACK_AREA_LIMIT: f64 = 4.0;
+
+/// The fallback of an ABF solve that failed or folded (see [`solve_with_sums`]): LSCM with
+/// the 3D angles when it has no flipped triangle and an area distortion at most
+/// [`FALLBACK_AREA_LIMIT`]; else SLIM when it has fewer flipped triangles and folded quads,
+/// or as many and a lower area distortion; else LSCM. Pins are honoured by either.
+/// Failures: those of the LSCM solve.
+fn flip_free_fallback(chart: &Chart, pins: &[(u32, [f64; 2])], why: String) -> Result<ChartSolution, ChartFailure> {
     let mut sol = lscm::solve(chart, pins)?;
-    sol.fallback = Some(Fallback { method: "lscm", reason: format!("abf failed: {reason}") });
+    let quality = |uv: &[[f64; 2]]| {
+        let area = crate::metrics::chart_metrics(&chart.positions, &chart.triangles, uv, &[]).distortion.area;
+        (count_flips(chart, uv), if area.is_nan() { f64::INFINITY } else { area })
+    };
+    let (lscm_flips, lscm_area) = quality(&sol.uv);
+    if lscm_flips > 0 || lscm_area > FALLBACK_AREA_LIMIT {
+        if let Ok(mut slim) = super::slim::solve(chart, pins, &super::slim::SlimOptions::default()) {
+            let (slim_flips, slim_area) = quality(&slim.uv);
+            if (slim_flips, slim_area) < (lscm_flips, lscm_area) {
+                let detail = match (slim.fallback.take(), slim.note.take()) {
+                    (Some(f), _) => format!(" ({} instead: {})", f.method, f.reason),
+                    (None, Some(n)) => format!(" ({n})"),
+                    (None, None) => String::new(),
+                };
+                let lscm_was = if lscm_flips > 0 {
+                    format!("has {lscm_flips} flipped triangle(s)")
+                } else {
+                    format!("has area distortion {lscm_area:.3e}")
+                };
+                slim.fallback = Some(Fallback {
+                    method: "slim",
+                    reason: format!("{why}; LSCM with the 3D angles {lscm_was}, so SLIM was used (area distortion {slim_area:.3}){detail}"),
+                });
+                return Ok(slim);
+            }
+        }
+    }
+    sol.fallback = Some(Fallback { method: "lscm", reason: why });
     Ok(sol)
 }

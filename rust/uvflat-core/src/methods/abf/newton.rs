@@ -4,8 +4,8 @@
 //! while they contract, and the update of angles, multipliers and slacks.
 //!
 //! Preconditions: a problem and a state of positive angles. Failures: a system that cannot be
-//! factored (singular, or for ABF++ not positive definite); non-convergence is reported by
-//! the run, not as an error.
+//! factored (singular, or for ABF++ not positive definite even with the diagonal shifts of
+//! [`Reduced::factor`]); non-convergence is reported by the run, not as an error.
 
 use super::*;
 
@@ -87,6 +87,10 @@ pub(super) struct PlusPlus {
     pub(super) jac: Vec<([f64; 3], [f64; 3])>,
     /// Free the evaluation while factoring (charts of [`LEAN_EVAL_FACES`] triangles or more).
     pub(super) lean: bool,
+    /// Factorizations that needed a diagonal shift ([`Reduced::factor`]), and the largest
+    /// relative shift used.
+    pub(super) shifted: usize,
+    pub(super) largest_shift: f64,
 }
 
 /// Charts of at least this many triangles free their per-triangle evaluation while the
@@ -144,14 +148,20 @@ pub(super) fn step_plus_plus(w: &mut PlusPlus, p: &Problem<'_>, s: &State, e: &m
             w.reduced = Some(Reduced::new(p)?);
         }
         let red = w.reduced.as_mut().expect("analysed");
-        if refresh && w.lean {
+        let shift = if refresh && w.lean {
             // Not needed while the matrix is factored: evaluated again after.
             e.faces = Vec::new();
             let factored = red.factor(p, vals);
             evaluate_into(p, s, e);
-            factored?;
+            factored?
         } else if refresh {
-            red.factor(p, vals)?;
+            red.factor(p, vals)?
+        } else {
+            0.0
+        };
+        if shift > 0.0 {
+            w.shifted += 1;
+            w.largest_shift = w.largest_shift.max(shift);
         }
         red.solve(p, &mut rhs)?;
         rhs
@@ -251,6 +261,9 @@ pub(super) struct Run {
     pub(super) converged: bool,
     pub(super) residual: f64,
     pub(super) stationarity: f64,
+    /// Factorizations regularised by a diagonal shift, and the largest relative shift.
+    pub(super) shifted: usize,
+    pub(super) largest_shift: f64,
 }
 
 pub(super) fn newton(p: &Problem<'_>, s: &mut State, opts: &AbfOptions) -> Result<Run, SolveError> {
@@ -261,7 +274,11 @@ pub(super) fn newton(p: &Problem<'_>, s: &mut State, opts: &AbfOptions) -> Resul
     let mut refactor_next = false;
     let mut e = evaluate(p, s);
     loop {
-        let run = |converged| Run { iterations: it, factorizations, converged, residual: e.residual, stationarity: e.stationarity };
+        let (shifted, largest_shift) = match &lin {
+            Linear::PlusPlus(w) => (w.shifted, w.largest_shift),
+            Linear::Plain(_) => (0, 0.0),
+        };
+        let run = |converged| Run { iterations: it, factorizations, converged, residual: e.residual, stationarity: e.stationarity, shifted, largest_shift };
         if !(e.residual.is_finite() && e.stationarity.is_finite()) {
             return Ok(run(false));
         }

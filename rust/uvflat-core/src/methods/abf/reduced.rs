@@ -3,8 +3,9 @@
 //! vertex rows, whose pattern is fixed by the chart and analysed once (fill-reducing vertex
 //! ordering, symbolic Cholesky), then refactored numerically at every Newton step.
 //!
-//! Preconditions: the problem's rows and face rows. Failures: a singular or indefinite
-//! reduced matrix, reported by the factorisation.
+//! Preconditions: the problem's rows and face rows. Failures: a reduced matrix that is not
+//! positive definite even with its diagonal shifted ([`Reduced::factor`]), reported by the
+//! factorisation.
 
 use super::*;
 use crate::solvers::refined_llt::{self, RefinedLlt};
@@ -105,6 +106,10 @@ pub(super) struct Reduced {
     pub(super) mem: faer::dyn_stack::MemBuffer,
 }
 
+/// Relative diagonal shifts tried in turn when the reduced matrix does not factor
+/// ([`Reduced::factor`]).
+pub(super) const SHIFTS: [f64; 7] = [0.0, 1e-12, 1e-10, 1e-8, 1e-6, 1e-4, 1e-2];
+
 /// Sequential: faer's supernodal Cholesky is left-looking and parallel only inside its dense
 /// blocks, which measured slower than sequential at 22k and 363k triangles.
 const PAR: faer::Par = faer::Par::Seq;
@@ -133,16 +138,48 @@ impl Reduced {
         Ok(Reduced { symbolic, factor: RefinedLlt::new(refined_llt::single_pays(m)), values: Vec::new(), mem })
     }
 
-    /// Numeric factorization for `values` on the pattern of `p` (kept for the solves).
+    /// Numeric factorization for `values` on the pattern of `p` (kept for the solves),
+    /// regularised when it is not positive definite: the diagonal is raised by each shift of
+    /// [`SHIFTS`] in turn (times the mean absolute diagonal entry) until the factorization
+    /// succeeds. Returns the relative shift used (0 when none was needed).
     ///
-    /// Failures: the matrix is not positive definite, or its workspace cannot be allocated.
-    pub(super) fn factor(&mut self, p: &Problem<'_>, values: Vec<f64>) -> Result<(), SolveError> {
+    /// The reduced matrix `J₂ P J₂ᵀ` is positive semi-definite by construction, and definite
+    /// when the vertex rows are independent of the triangle rows; near-degenerate corners
+    /// (cotangents of 1e6 and more in the wheel rows) and vertex rows that are nearly
+    /// dependent on irregular boundaries (long seams, slits, fins) make it fail Cholesky in
+    /// floating point. Shifting the diagonal by δ is the regularised KKT system with `−δ I`
+    /// in its multiplier block (as interior-point solvers do for rank-deficient constraint
+    /// Jacobians): the step keeps the angle updates' triangle sums and lowers the constraint
+    /// residuals a little less than a full Newton step, and the iteration goes on instead of
+    /// giving up.
+    ///
+    /// Failures: still not positive definite with the largest shift, or the factorization's
+    /// workspace cannot be allocated.
+    pub(super) fn factor(&mut self, p: &Problem<'_>, values: Vec<f64>) -> Result<f64, SolveError> {
         let m = p.m();
         self.values = values;
-        let a = faer::sparse::SparseColMatRef::new(faer::sparse::SymbolicSparseColMatRef::new_checked(m, m, &p.col_ptr, None, &p.row_idx), &self.values);
         let req = RefinedLlt::<f64>::factor_scratch(&self.symbolic, PAR);
         let mut mem = faer::dyn_stack::MemBuffer::try_new(req).map_err(|e| SolveError::Other(format!("{e:?}")))?;
-        self.factor.factor(&self.symbolic, a, faer::Side::Upper, PAR, faer::dyn_stack::MemStack::new(&mut mem))
+        let mean = (0..m).map(|r| self.values[p.diagonal_slot(r)].abs()).sum::<f64>() / m.max(1) as f64;
+        let mean = if mean > 0.0 && mean.is_finite() { mean } else { 1.0 };
+        let mut applied = 0.0;
+        let mut last = SolveError::NotPositiveDefinite;
+        for &shift in &SHIFTS {
+            if shift > applied {
+                let delta = (shift - applied) * mean;
+                for r in 0..m {
+                    self.values[p.diagonal_slot(r)] += delta;
+                }
+                applied = shift;
+            }
+            let a = faer::sparse::SparseColMatRef::new(faer::sparse::SymbolicSparseColMatRef::new_checked(m, m, &p.col_ptr, None, &p.row_idx), &self.values);
+            match self.factor.factor(&self.symbolic, a, faer::Side::Upper, PAR, faer::dyn_stack::MemStack::new(&mut mem)) {
+                Ok(()) => return Ok(shift),
+                Err(SolveError::NotPositiveDefinite) => last = SolveError::NotPositiveDefinite,
+                Err(e) => return Err(e),
+            }
+        }
+        Err(last)
     }
 
     /// Solve with the last factorization, in place.

@@ -70,9 +70,14 @@
 //! iteration, and the line search lowers chart + scaffold energy, so the chart's own symmetric
 //! Dirichlet energy strictly decreases every iteration ([`solve_with_history`] returns it).
 //!
-//! Pins: the energy does not see them; the finished map is moved onto the pins by the
-//! least-squares similarity (which scales it; exact for one or two pins) and the report says
-//! so.
+//! Pins: with two or more pinned vertices at distinct UVs, the start honours them (pinned LSCM
+//! or pinned mean value, not rescaled), they are fixed values of every global step
+//! (eliminated on the step's pattern, `held.rs`), so they hold exactly, and the chart's rest
+//! shapes are the 3D triangles scaled by the pins' scale
+//! ([`super::nonlinear::pins::pins_scale`]), so the unpinned part lies at the pins' scale. When
+//! no valid start honours them the chart falls back to a pinned map
+//! ([`super::nonlinear::pins::pinned_fallback`]). A single pin is reached by translating the
+//! result (exact).
 //!
 //! Failures: a chart that is not a disk ([`crate::methods::require_disk`]). When neither start is valid
 //! (degenerate charts in floating point), the mean value map is returned marked as a fallback.
@@ -90,7 +95,8 @@ use rayon::prelude::*;
 use super::nonlinear::energy::{scale_optimally, symmetric_dirichlet, weighted_sum};
 use super::nonlinear::iterate::{quads_left_out_note, Change, Iteration};
 use super::nonlinear::pattern::{chart_edges, BlockPattern, BLOCK};
-use super::nonlinear::pins::honour_pins_by_similarity;
+use super::lscm::pins_span;
+use super::nonlinear::pins::{pinned_fallback, pins_scale_note, rest_positions, translate_onto_single_pin};
 use super::nonlinear::proxy::reweight;
 use super::nonlinear::start::{self, flip_free_start};
 use super::nonlinear::TriangleOperators;
@@ -99,6 +105,7 @@ use crate::charts::Chart;
 use crate::solvers::line_search::{all_positive, flip_free_line_search, max_flip_free_step, LineSearchOptions};
 
 mod chords;
+mod held;
 mod mesh;
 mod regularise;
 
@@ -164,20 +171,26 @@ pub struct ScaffoldHistory {
 /// A valid starting map: UVs, its energy and its name.
 type Start = (Vec<[f64; 2]>, f64, &'static str);
 
-/// The valid start with the lowest energy, each candidate scaled optimally: LSCM and the mean
-/// value map on a circle (Floater 2003, an embedding by Tutte's theorem up to round-off), the
+/// The valid start with the lowest energy, each candidate scaled optimally (honouring the pins
+/// instead when they span more than a point): LSCM and the mean value map on a circle (Floater 2003, an embedding by Tutte's theorem up to round-off), the
 /// latter only when LSCM is above a symmetric Dirichlet energy of 2 ([`start::pick_staged`]). Valid:
 /// every chart triangle positive, finite energy, no boundary self-overlap, and a scaffold can
 /// be built around it. `None` when no candidate is valid (the reasons are returned).
-fn pick_start(chart: &Chart, ops: &TriangleOperators) -> (Option<Start>, Vec<String>) {
+fn pick_start(chart: &Chart, ops: &TriangleOperators, pins: &[(u32, [f64; 2])]) -> (Option<Start>, Vec<String>) {
     let tris = &chart.triangles;
     let mut rejected = Vec::new();
+    // Pins spanning more than a point are honoured by the starts and fix their scale.
+    let spanning = pins_span(pins);
     let best = start::pick_staged(
         chart,
-        &[],
+        if spanning { pins } else { &[] },
         true,
         &mut rejected,
-        |uv| scale_optimally(ops, tris, uv),
+        |uv| {
+            if !spanning {
+                scale_optimally(ops, tris, uv)
+            }
+        },
         |uv| {
             let e = symmetric_dirichlet(ops, tris, uv);
             if !all_positive(tris, uv) || !e.is_finite() {
@@ -227,20 +240,32 @@ fn run(
     crate::methods::require_disk(chart)?;
     let tris = &chart.triangles;
     let n = chart.positions.len();
-    let ops = TriangleOperators::local_frames(&chart.positions, tris);
+    // Pins spanning more than a point fix the map's scale: the energy is measured against the
+    // 3D shape at that scale (see the module docs).
+    let (rest, scale) = rest_positions(chart, pins);
+    let ops = TriangleOperators::local_frames(&rest, tris);
     if !(ops.total_area > 0.0) {
         return Err(ChartFailure("the chart has zero 3D area".into()));
     }
     let t_start = Instant::now();
-    let (start, rejected) = pick_start(chart, &ops);
+    let (start, rejected) = pick_start(chart, &ops, pins);
     let Some((mut uv, mut energy, start_name)) = start else {
+        let why = format!("no valid (flip-free, overlap-free) start for the scaffold iterations ({})", rejected.join("; "));
+        if !pins.is_empty() {
+            return Ok((pinned_fallback(chart, pins, &why)?, ScaffoldHistory::default()));
+        }
         let mut sol = ChartSolution::direct(flip_free_start(chart)?);
-        sol.fallback = Some(crate::methods::Fallback {
-            method: "mean_value",
-            reason: format!("no valid (flip-free, overlap-free) start for the scaffold iterations ({})", rejected.join("; ")),
-        });
+        sol.fallback = Some(crate::methods::Fallback { method: "mean_value", reason: why });
         return Ok((sol, ScaffoldHistory::default()));
     };
+    // Unknowns held at their values in every global step: the pins, when they span.
+    let mut held = vec![false; 2 * n];
+    if pins_span(pins) {
+        for &(v, _) in pins {
+            held[2 * v as usize] = true;
+            held[2 * v as usize + 1] = true;
+        }
+    }
     // The chart energy and the barrier cover both diagonal splits of every quad, so quads stay
     // strictly convex (see `barrier_triangles`).
     let barrier_tris;
@@ -252,12 +277,13 @@ fn run(
     } else {
         let (b, w, left_out) = crate::methods::barrier_triangles(chart, &uv);
         barrier_tris = b;
-        let full = TriangleOperators::local_frames(&chart.positions, &barrier_tris);
+        let full = TriangleOperators::local_frames(&rest, &barrier_tris);
         let step_area = full.area.clone();
         let ops = full.weighted(&w);
         energy = symmetric_dirichlet(&ops, &barrier_tris, &uv);
         (&barrier_tris, ops, step_area, left_out)
     };
+    drop(rest);
     let total = ops.total_area;
     let mut history = ScaffoldHistory {
         start: start_name,
@@ -425,6 +451,8 @@ fn run(
             stop_note = Some("scaffold iterations stopped early: a scaffold entry is missing from the pattern".into());
             break;
         }
+        // Pins: fixed values of the step, eliminated on the same pattern (see `held`).
+        held::eliminate(pat, &mut values, &mut b, &held, &uv);
         let t3 = Instant::now();
         let step = match solve_regularised(pat, &mut values, &mut b, &uv) {
             Ok(step) => {
@@ -440,7 +468,8 @@ fn run(
             }
         };
         let t4 = Instant::now();
-        let (x, solve_seconds) = (step.x, step.solve_seconds);
+        let (mut x, solve_seconds) = (step.x, step.solve_seconds);
+        held::restore(&mut x, &held, &uv);
         if x[..2 * n].iter().any(|v| !v.is_finite()) {
             stop_note = Some("scaffold iterations stopped early: the global step is not finite".into());
             break;
@@ -490,7 +519,11 @@ fn run(
     let mut sol = ChartSolution::direct(uv);
     sol.iterations = iterations;
     sol.residual = it.change;
-    let pin_note = honour_pins_by_similarity(&mut sol.uv, pins, "scaffold");
+    let pin_note = match scale {
+        Some(_) => pins_scale_note(pins.len(), scale),
+        None if pins_span(pins) => Some(format!("{} pinned vertex(es) held fixed", pins.len())),
+        None => translate_onto_single_pin(&mut sol.uv, pins, "scaffold"),
+    };
     let remeshes = history.remeshed.iter().filter(|&&r| r).count();
     let summary = format!(
         "symmetric Dirichlet {energy:.6} after {iterations} iteration(s), started from {}; scaffold re-meshed {remeshes} time(s), {} symbolic analysis(es)",
