@@ -58,28 +58,110 @@ def reset_scene():
 
 
 def read_off(path):
-    """Read an OFF file: ``(positions (V,3), corner_verts (C,), face_sizes (F,))``."""
-    text = Path(path).read_text()
+    """Read an OFF file: ``(positions (V,3), corner_verts (C,), face_sizes (F,))``, as written.
+    Raises ``MeshFileError`` naming the file and what is wrong (empty, no counts, fewer
+    vertices or faces than announced, a value that is not a number, a bad index)."""
+    text = Path(path).read_text(errors="replace")
     lines = [ln.split("#", 1)[0].strip() for ln in text.splitlines()]
     lines = [ln for ln in lines if ln]
-    header = lines[0]
-    if not header.endswith("OFF"):
-        raise ValueError(f"{path}: not an OFF file")
-    rest = header[len("OFF"):].split() if header != "OFF" else []
-    at = 1
-    if not rest:
-        rest = lines[1].split()
-        at = 2
-    n_v, n_f = int(rest[0]), int(rest[1])
-    positions = np.array(" ".join(lines[at:at + n_v]).split(), dtype=np.float64)
-    positions = positions.reshape(n_v, -1)[:, :3]
+    if not lines:
+        raise MeshFileError(f"{path}: empty file (an OFF file starts with OFF and the vertex and "
+                            "face counts)")
+    first = lines[0].split()
+    if not first[0].endswith("OFF"):
+        raise MeshFileError(f"{path}: not an OFF file (it starts with {first[0][:40]!r})")
+    counts, at = (first[1:], 1) if len(first) > 1 else (
+        lines[1].split() if len(lines) > 1 else [], 2)
+    if len(counts) < 2:
+        raise MeshFileError(f"{path}: the OFF header has no vertex and face counts")
+    try:
+        n_v, n_f = int(counts[0]), int(counts[1])
+    except ValueError:
+        raise MeshFileError(f"{path}: the OFF counts {' '.join(counts[:3])!r} are not "
+                            "integers") from None
+    if n_v < 0 or n_f < 0:
+        raise MeshFileError(f"{path}: negative OFF counts {n_v} {n_f}")
+    vertex_rows = lines[at:at + n_v]
+    if len(vertex_rows) < n_v:
+        raise MeshFileError(f"{path}: the header announces {n_v} vertices, the file holds "
+                            f"{len(vertex_rows)}")
+    try:
+        positions = np.array(" ".join(vertex_rows).split(), dtype=np.float64)
+        positions = positions.reshape(n_v, -1)[:, :3]
+        if positions.shape[1] != 3:
+            raise ValueError
+    except ValueError:
+        for v, row in enumerate(vertex_rows):  # name the first vertex row that is wrong
+            try:
+                if len([float(x) for x in row.split()]) < 3:
+                    raise ValueError
+            except ValueError:
+                raise MeshFileError(f"{path}: vertex {v} is not three numbers: "
+                                    f"{row[:60]!r}") from None
+        positions = np.array([[float(x) for x in row.split()[:3]] for row in vertex_rows],
+                             dtype=np.float64).reshape(n_v, 3)
     face_rows = lines[at + n_v:at + n_v + n_f]
-    tokens = [row.split() for row in face_rows]
-    face_sizes = np.array([int(t[0]) for t in tokens], dtype=np.int64)
-    corner_verts = np.fromiter((int(v) for t, n in zip(tokens, face_sizes) for v in t[1:1 + n]),
-                               dtype=np.int64, count=int(face_sizes.sum()))
+    if len(face_rows) < n_f:
+        raise MeshFileError(f"{path}: the header announces {n_f} faces, the file holds "
+                            f"{len(face_rows)}")
+    sizes, corners = [], []
+    for f, row in enumerate(face_rows):
+        t = row.split()
+        try:
+            n = int(t[0])
+            face = [int(v) for v in t[1:1 + n]]
+        except ValueError:
+            raise MeshFileError(f"{path}: face {f} is not a corner count and vertex indices: "
+                                f"{row[:60]!r}") from None
+        if len(face) != n:
+            raise MeshFileError(f"{path}: face {f} announces {n} corners, names {len(face)}")
+        sizes.append(n)
+        corners += face
+    face_sizes = np.array(sizes, dtype=np.int64)
+    corner_verts = np.array(corners, dtype=np.int64)
     _check_soup(path, positions, corner_verts, face_sizes)
     return positions, corner_verts, face_sizes
+
+
+def repair_repeated_corners(corner_verts, face_sizes):
+    """The repair of faces that name a vertex more than once: the repeated corners of a face
+    are merged (cyclically: ``1 2 2 3 4`` and ``1 2 3 4 1`` become ``1 2 3 4``); a face left
+    with fewer than three corners, or still naming a vertex twice (``1 2 1 3``), is removed.
+    The OBJ importer repairs faces the same way. Returns ``(corner_verts, face_sizes,
+    repairs)``, ``repairs`` a list of ``(face, corners as written, corners kept or None)``."""
+    corner_verts = np.asarray(corner_verts, dtype=np.int64).reshape(-1)
+    face_sizes = np.asarray(face_sizes, dtype=np.int64).reshape(-1)
+    if not len(face_sizes):
+        return corner_verts, face_sizes, []
+    face_of = np.repeat(np.arange(len(face_sizes)), face_sizes)
+    n_v = int(corner_verts.max()) + 1 if len(corner_verts) else 1
+    distinct = np.unique(face_of * n_v + corner_verts)
+    n_distinct = np.bincount(distinct // n_v, minlength=len(face_sizes))
+    bad = np.flatnonzero(n_distinct < face_sizes)
+    if not len(bad):
+        return corner_verts, face_sizes, []
+    starts = np.concatenate([[0], np.cumsum(face_sizes)[:-1]])
+    repairs = []
+    new_sizes = face_sizes.copy()
+    for f in bad.tolist():
+        corners = corner_verts[starts[f]:starts[f] + face_sizes[f]].tolist()
+        kept = corners[:1] + [v for i, v in enumerate(corners[1:], 1) if v != corners[i - 1]]
+        while len(kept) > 1 and kept[-1] == kept[0]:
+            kept.pop()
+        if len(kept) < 3 or len(set(kept)) != len(kept):
+            kept = None
+        repairs.append((f, corners, kept))
+        new_sizes[f] = 0 if kept is None else len(kept)
+    # faces not repaired keep their corners; the repaired ones get theirs written after
+    new_starts = np.concatenate([[0], np.cumsum(new_sizes)[:-1]])
+    out = np.empty(int(new_sizes.sum()), dtype=np.int64)
+    good = n_distinct[face_of] == face_sizes[face_of]
+    at = new_starts[face_of] + np.arange(len(corner_verts)) - starts[face_of]
+    out[at[good]] = corner_verts[good]
+    for f, _, kept in repairs:
+        if kept is not None:
+            out[new_starts[f]:new_starts[f] + len(kept)] = kept
+    return out, new_sizes[new_sizes > 0], repairs
 
 
 class MeshFileError(ValueError):
@@ -223,15 +305,18 @@ def check_mesh_file(path):
     importers repair such files silently (a NaN vertex moved to the origin, a bad face
     dropped), which would unwrap something other than the file. ``.off``, ``.obj`` and
     ``.ply`` are read as written; ``.blend`` files are checked after loading
-    (``check_mesh_object``). Raises ``MeshFileError`` naming the file and the element."""
+    (``check_mesh_object``). Raises ``MeshFileError`` naming the file and the element, also
+    for a file with no faces. Returns the file's ``(positions, corner_verts, face_sizes)`` as
+    written (``None`` for ``.blend``)."""
     path = Path(path)
     suffix = path.suffix.lower()
     if not path.is_file():
         raise MeshFileError(f"{path}: no such file")
     if suffix == ".off":
-        read_off(path)
+        soup = read_off(path)
     elif suffix == ".obj":
-        _check_soup(path, *_obj_soup(path))
+        soup = _obj_soup(path)
+        _check_soup(path, *soup)
     elif suffix == ".ply":
         try:
             soup = _ply_soup(path)
@@ -240,6 +325,13 @@ def check_mesh_file(path):
                 raise
             raise MeshFileError(f"{path}: cannot be read as PLY ({ex})") from None
         _check_soup(path, *soup)
+    else:
+        return None
+    positions, corner_verts, face_sizes = soup
+    if not len(face_sizes):
+        raise MeshFileError(f"{path}: no faces ({len(positions)} vertices): nothing to unwrap")
+    return (np.asarray(positions, dtype=np.float64).reshape(-1, 3),
+            np.asarray(corner_verts, dtype=np.int64), np.asarray(face_sizes, dtype=np.int64))
 
 
 def check_mesh_object(path, obj):
@@ -269,7 +361,10 @@ def load_mesh_object(path):
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix == ".off":
-        return link_mesh_object(path.stem, mesh_io().new_mesh(path.stem, *read_off(path)))
+        positions, corner_verts, face_sizes = read_off(path)
+        corner_verts, face_sizes, _ = repair_repeated_corners(corner_verts, face_sizes)
+        return link_mesh_object(path.stem, mesh_io().new_mesh(path.stem, positions,
+                                                              corner_verts, face_sizes))
     before = set(bpy.data.objects)
     if suffix == ".obj":
         bpy.ops.wm.obj_import(filepath=str(path))
@@ -287,7 +382,38 @@ def load_mesh_object(path):
            and o.name in bpy.context.scene.objects]
     if not new:
         raise ValueError(f"{path}: no mesh object found")
+    if suffix == ".ply":
+        _restore_repaired_ply_faces(path, new[0])
     return new[0]
+
+
+def _restore_repaired_ply_faces(path, obj):
+    """The PLY importer drops every face naming a vertex twice; put back the faces
+    ``repair_repeated_corners`` keeps (so that every format gets the same repair)."""
+    import bmesh
+
+    try:
+        positions, corner_verts, face_sizes = _ply_soup(path)
+    except (ValueError, IndexError, KeyError, StopIteration):
+        return
+    _, _, repairs = repair_repeated_corners(corner_verts, face_sizes)
+    kept = [k for _, _, k in repairs if k is not None]
+    mesh = obj.data
+    if not kept or len(mesh.vertices) != len(positions):
+        return
+    if len(mesh.polygons) != len(face_sizes) - len(repairs):
+        return  # not the importer this was written for: leave the mesh as imported
+    bm = bmesh.new()
+    bm.from_mesh(mesh)
+    bm.verts.ensure_lookup_table()
+    for face in kept:
+        try:
+            bm.faces.new([bm.verts[v] for v in face])
+        except ValueError:  # the same face exists already
+            pass
+    bm.to_mesh(mesh)
+    bm.free()
+    mesh.update()
 
 
 def suzanne(name="Suzanne"):

@@ -12,19 +12,41 @@ OUTPUT_FOLDER/<name>.<format>, with one summary line per file and a final table;
 status is non-zero if any file failed.  ``--report report.json`` writes every chart report.
 Goes through the add-on's own operator (``bpy.ops.uv.uvflat_unwrap``), registered from
 ``addon/``.
+
+A batch runs on an existing Dask cluster with ``--cluster ADDRESS`` instead of ``--jobs``:
+
+    .venv/bin/python -m pip install 'dask[distributed]'
+    .venv/bin/python blender_scripts/unwrap.py INPUT... OUTPUT_FOLDER --cluster tcp://HOST:8786
+
+One task per file, each running the very same per-file process as ``--jobs`` on a worker, so the
+outputs, the per-file lines, the table and ``--report`` are the same.  A task whose worker dies
+is run again on another worker (a task that raises, up to twice: Dask ``retries=``); each file is
+written under a hidden name and renamed into place when complete, so a file is never left half
+written.  The workers need this environment (``bpy``, ``uvflat``) and must see this script, the
+inputs and OUTPUT_FOLDER under the same paths (a shared file system).  Why Dask: it is pure
+Python and installs with pip, lighter than Ray, with no separate runtime beside the workers, and
+a cluster is just a TCP scheduler address such as tcp://host:8786 (``dask scheduler`` on one
+machine, ``dask worker tcp://host:8786`` on each of the others).
+
+Input the importers would repair silently is refused with one line naming the file and the
+element (a non-finite vertex, a face naming a missing vertex, an empty or truncated file, a file
+with no faces), except a face naming a vertex more than once, which is repaired and reported
+(``repairs`` in ``--report``): the repeated corners of a face are merged (``f 1 2 2 3 4``
+becomes ``f 1 2 3 4``), and a face left with fewer than three corners or still naming a vertex
+twice (``f 1 2 1 3``) is removed.
 """
 
 from __future__ import annotations
 
 import argparse
+import functools
 import glob
 import json
 import math
 import os
-import subprocess
 import sys
-import tempfile
 import time
+import uuid
 from concurrent.futures import ThreadPoolExecutor, as_completed
 from pathlib import Path
 
@@ -33,6 +55,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 
+import cluster  # noqa: E402
 import common  # noqa: E402
 
 
@@ -117,6 +140,9 @@ def parse_args(argv):
                         help="write every chart report (per file and object) to this JSON file")
     parser.add_argument("--jobs", type=int, default=None,
                         help="batch: worker processes (default: the number of cores)")
+    parser.add_argument("--cluster", default=None, metavar="ADDRESS",
+                        help="batch: run one task per file on the Dask cluster whose scheduler "
+                             "is at ADDRESS (e.g. tcp://host:8786) instead of --jobs")
     parser.add_argument("--format", choices=("obj", "glb", "blend"), default="obj",
                         help="batch: format of the files written into the output folder")
     args = parser.parse_args(argv)
@@ -131,7 +157,7 @@ def parse_args(argv):
 
 
 # Options handled by the batch driver itself, not handed to each file's worker.
-_DRIVER_ONLY = {"paths", "help", "report", "jobs", "format", "png"}
+_DRIVER_ONLY = {"paths", "help", "report", "jobs", "cluster", "format", "png"}
 
 
 def worker_argv(parser_args, parser):
@@ -211,6 +237,9 @@ def _check_range(flag: str, value, prop, method=None) -> None:
         raise UsageError(f"{flag} {value!r}{of} (expected one of "
                          f"{', '.join(i[0] for i in items)})")
     low, high = keywords.get("min"), keywords.get("max")
+    if getattr(prop, "function", None) is bpy.props.IntProperty:  # stored in 32 bits
+        low = -2**31 if low is None else low
+        high = 2**31 - 1 if high is None else high
     if low is not None and value < low or high is not None and value > high:
         bounds = (f"from {low} to {high}" if low is not None and high is not None
                   else f"at least {low}" if low is not None else f"at most {high}")
@@ -238,7 +267,18 @@ def check_args(args, methods, core_methods):
                              "its output")
         if args.jobs is not None and args.jobs < 1:
             raise UsageError(f"--jobs {args.jobs}: must be at least 1")
+        if args.cluster is not None:
+            if args.jobs is not None:
+                raise UsageError("--jobs and --cluster exclude each other (a cluster runs as "
+                                 "many files at once as its workers have threads)")
+            try:
+                cluster.check_address(args.cluster)
+            except cluster.ClusterError as ex:
+                raise UsageError(str(ex)) from None
     else:
+        if args.cluster is not None:
+            raise UsageError("--cluster runs a batch (several inputs, a folder or a glob "
+                             "pattern, then an output folder)")
         if args.output.suffix.lower() not in OUTPUT_SUFFIXES:
             raise UsageError(f"output {args.output}: unsupported format "
                              f"{args.output.suffix or '(none)'} (use {', '.join(OUTPUT_SUFFIXES)})")
@@ -293,6 +333,9 @@ def check_args(args, methods, core_methods):
     if args.sharp_angle is not None and not (math.isfinite(args.sharp_angle)
                                              and 0.0 < args.sharp_angle < 180.0):
         raise UsageError(f"--sharp-angle {args.sharp_angle}: must be between 0 and 180 degrees")
+    if args.avoid_group and not args.auto_seams:
+        raise UsageError(f"--avoid-group {args.avoid_group!r} steers automatic seams: it "
+                         "contradicts --no-auto-seams")
     # automatic seams travel with the packing properties to the operator
     pack_props.update(auto_seams=args.auto_seams, max_stretch=args.max_stretch,
                       max_cones=args.max_cones, mark_seams=args.mark_seams,
@@ -376,6 +419,27 @@ def chart_report(chart):
     return out
 
 
+def file_repairs(source, repairs):
+    """``common.repair_repeated_corners``'s repairs as JSON values: the face (counted from 0)
+    and its vertices as the file numbers them (from 1 in .obj, from 0 in .off and .ply)."""
+    base = 1 if source.suffix.lower() == ".obj" else 0
+    return [{"face": f, "corners": [v + base for v in written],
+             "kept": None if kept is None else [v + base for v in kept]}
+            for f, written, kept in repairs]
+
+
+def repairs_line(source, repairs, shown=5):
+    """One line telling which faces naming a vertex twice were merged or removed."""
+    merged = sum(r["kept"] is not None for r in repairs)
+    parts = [f"face {r['face']} ({' '.join(map(str, r['corners']))} -> "
+             + (" ".join(map(str, r["kept"])) if r["kept"] is not None else "removed") + ")"
+             for r in repairs[:shown]]
+    more = f", and {len(repairs) - shown} more" if len(repairs) > shown else ""
+    return (f"repaired {source}: {len(repairs)} face{'s' * (len(repairs) != 1)} naming a vertex "
+            f"more than once ({merged} merged, {len(repairs) - merged} removed): "
+            f"{', '.join(parts)}{more}")
+
+
 def run_single(args, addon, method_props, pack_props) -> int:
     """Unwrap every mesh object of ``args.inputs[0]`` into ``args.output``."""
     mesh_io = addon.mesh_io
@@ -383,9 +447,9 @@ def run_single(args, addon, method_props, pack_props) -> int:
     started = time.perf_counter()
     log(f"loading {source}")
     try:
-        # the file as written: a non-finite vertex or a face naming a missing vertex is an
-        # error naming the element (importers would repair both silently)
-        common.check_mesh_file(source)
+        # the file as written: a non-finite vertex, a face naming a missing vertex, an empty
+        # or truncated file is an error naming the element (importers would repair or fail)
+        soup = common.check_mesh_file(source)
         common.load_mesh_object(source)
         objects = [o for o in bpy.context.scene.objects if o.type == "MESH"]
         for obj in objects:
@@ -397,6 +461,27 @@ def run_single(args, addon, method_props, pack_props) -> int:
     for obj in objects:
         log(f"loaded '{obj.name}': {len(obj.data.vertices)} vertices, "
             f"{len(obj.data.polygons)} faces")
+    n_faces = sum(len(o.data.polygons) for o in objects)
+    if not n_faces:
+        return fail(f"input {source}: no faces "
+                    f"({sum(len(o.data.vertices) for o in objects)} vertices): nothing to unwrap")
+    repairs = []
+    if soup is not None:
+        # a face naming a vertex twice is repaired the same way for every format (the
+        # importers would drop some silently), and said so
+        _, sizes, repairs = common.repair_repeated_corners(soup[1], soup[2])
+        repairs = file_repairs(source, repairs)
+        if repairs:
+            log(repairs_line(source, repairs))
+        if n_faces != len(sizes):
+            log(f"note: {source} holds {len(sizes)} faces"
+                f"{' after repairs' if repairs else ''}, {n_faces} were read")
+    if args.avoid_group and not any(o.vertex_groups.get(args.avoid_group) for o in objects):
+        groups = sorted({g.name for o in objects for g in o.vertex_groups})
+        have = (f"its vertex groups are {', '.join(map(repr, groups))}" if groups
+                else "it has no vertex groups")
+        return fail(f"--avoid-group {args.avoid_group!r}: no vertex group of that name in "
+                    f"input {source} ({have})")
 
     if args.seams_from_islands:
         for obj in objects:
@@ -419,6 +504,12 @@ def run_single(args, addon, method_props, pack_props) -> int:
     addon.engine.PROGRESS_HOOK = bar
     try:
         result = bpy.ops.uv.uvflat_unwrap(method=args.method, **pack_props, **method_props)
+    except RuntimeError as ex:
+        text = str(ex).strip()
+        if "Traceback" in text:  # a fault of the add-on, not of the input: shown in full
+            raise
+        # what the operator reports about the input, as one line
+        return fail(f"input {source}: {text.removeprefix('Error: ').splitlines()[0]}")
     finally:
         addon.engine.PROGRESS_HOOK = None
         bar.close()
@@ -460,6 +551,7 @@ def run_single(args, addon, method_props, pack_props) -> int:
             "file": str(source), "output": str(args.output), "method": args.method,
             "status": "charts failed" if status else "ok", "seconds": time.perf_counter() - started,
             "summary": summary.line(), "non_manifold_edges": summary.non_manifold_edges,
+            "repairs": repairs,
             "objects": {name: [chart_report(c) for c in r.charts]
                         for name, r in summary.results.items()},
         }
@@ -479,39 +571,63 @@ def _file_line(source, rc, report, stderr, out):
                 "flips": 0, "seconds": 0.0, "output": "-",
                 "detail": last[-1] if last else f"exit status {rc}"}
     charts = [c for cs in report["objects"].values() for c in cs]
+    repaired = len(report.get("repairs", ()))
+    detail = report["summary"] + (f"; {repaired} face{'s' * (repaired != 1)} naming a vertex "
+                                  "twice repaired" if repaired else "")
     return {"file": source.name, "status": report["status"], "objects": len(report["objects"]),
             "charts": len(charts), "failed": sum(c["status"] == "failed" for c in charts),
             "flips": sum(int(c["flips"]) for c in charts), "seconds": report["seconds"],
-            "output": str(out), "detail": report["summary"]}
+            "output": str(out), "detail": detail}
+
+
+def _on_threads(jobs, call, items):
+    """``call(*item)`` for every item, ``jobs`` at a time; yields ``(item, result)``."""
+    log(f"{len(items)} files, {jobs} worker process{'es' * (jobs != 1)}")
+    with ThreadPoolExecutor(max_workers=jobs) as pool:
+        futures = {pool.submit(call, *item): item for item in items}
+        for future in as_completed(futures):
+            try:
+                result = future.result()
+            except OSError as ex:  # e.g. the output folder went away: that file's error
+                result = (1, None, f"{type(ex).__name__}: {ex}")
+            yield futures[future], result
 
 
 def run_batch(args) -> int:
-    """One worker process per file (``--jobs`` at a time); a line per file, a final table."""
+    """One worker process per file (``--jobs`` at a time on this machine, or one task each
+    on the workers of ``--cluster``); a line per file, a final table."""
+    client, unwrap_file = None, cluster.unwrap_file
+    if args.cluster is not None:
+        try:  # reached before anything is written
+            client, unwrap_file = cluster.connect(args.cluster, log=log)
+        except cluster.ClusterError as ex:
+            return fail(ex)
     args.output.mkdir(parents=True, exist_ok=True)
-    jobs = args.jobs or os.cpu_count() or 1
     forwarded = worker_argv(args, args.parser)
+    run_id = f"uvflat-{uuid.uuid4().hex[:8]}"
+    # the same per-file function for --jobs and --cluster (there, as the cluster imports
+    # cluster.py): the same files either way
+    call = functools.partial(unwrap_file, script=Path(__file__).resolve(),
+                             options=forwarded, cwd=os.getcwd(), run_id=run_id)
+    items = [(source, args.output / f"{source.stem}.{args.format}") for source in args.inputs]
+    if client is not None:
+        log(f"{len(items)} files, one task each on the cluster")
+        results = cluster.map_on_cluster(client, call, items)
+    else:
+        results = _on_threads(args.jobs or os.cpu_count() or 1, call, items)
     rows, reports, worst = [], [], 0
-    with tempfile.TemporaryDirectory(prefix="uvflat-batch-") as tmp:
-        def work(source):
-            out = args.output / f"{source.stem}.{args.format}"
-            report = Path(tmp) / f"{source.stem}.json"
-            cmd = [sys.executable, str(Path(__file__).resolve()), str(source), str(out),
-                   *forwarded, "--report", str(report)]
-            r = subprocess.run(cmd, capture_output=True, text=True, stdin=subprocess.DEVNULL)
-            data = json.loads(report.read_text()) if report.is_file() else None
-            return source, out, r.returncode, data, r.stderr
-
-        log(f"{len(args.inputs)} files, {jobs} worker process{'es' * (jobs != 1)}")
-        with ThreadPoolExecutor(max_workers=jobs) as pool:
-            futures = [pool.submit(work, source) for source in args.inputs]
-            for future in as_completed(futures):
-                source, out, rc, data, stderr = future.result()
-                row = _file_line(source, rc, data, stderr, out)
-                rows.append(row)
-                if data is not None:
-                    reports.append(data)
-                worst = max(worst, 1 if rc not in (0, 2) else rc)
-                log(f"{row['file']}: {row['status']}: {row['detail']}")
+    try:
+        for (source, out), (rc, data, stderr) in results:
+            row = _file_line(source, rc, data, stderr, out)
+            rows.append(row)
+            if data is not None:
+                reports.append(data)
+            worst = max(worst, 1 if rc not in (0, 2) else rc)
+            log(f"{row['file']}: {row['status']}: {row['detail']}")
+    finally:
+        if client is not None:
+            client.close()
+        cluster.remove_leftovers(args.output, run_id)
     rows.sort(key=lambda r: r["file"])
     width = max(len(r["file"]) for r in rows)
     print(f"{'file':<{width}}  {'status':<13} {'objects':>7} {'charts':>7} {'failed':>6} "

@@ -307,6 +307,9 @@ def _one_line_error(r, *needles):
     (["--max-iterations", "0", "--method", "slim"], "--max-iterations"),
     (["--tolerance-exponent", "5", "--method", "slim"], "--tolerance-exponent"),
     (["--max-iterations", "nan", "--method", "slim"], "--max-iterations"),
+    (["--max-iterations", "1000000000000", "--method", "slim"], "--max-iterations"),
+    (["--max-iterations", "1000000000000", "--method", "spectral"], "--max-iterations"),
+    (["--max-iterations", "2147483648", "--method", "abf"], "--max-iterations"),
 ])
 def test_batch_unwrap_rejects_bad_arguments_before_writing(tmp_path, args, needle):
     src, out = tmp_path / "grid.obj", tmp_path / "out.obj"
@@ -373,3 +376,154 @@ def test_benchmark_floor_is_the_ratio_a_zero_second_solve_would_leave():
     assert cells["Blender ANGLE_BASED"][col] == "–"
     # Every row has as many cells as the header.
     assert all(len(c) == len(head) for c in cells.values())
+
+
+# ---------------------------------------------------------------------------------------------
+# Hostile input: one clear line naming the file (or, for a face naming a vertex twice, a
+# repair that is reported)
+
+_PLY_HEADER = ("ply\nformat ascii 1.0\nelement vertex {v}\nproperty float x\nproperty float y\n"
+               "property float z\nelement face {f}\nproperty list uchar int vertex_indices\n"
+               "end_header\n")
+
+
+@pytest.mark.parametrize("name,text,needle", [
+    ("empty.off", "", "empty file"),
+    ("blank.off", "\n  \n# only a comment\n", "empty file"),
+    ("header.off", "OFF\n", "no vertex and face counts"),
+    ("words.off", "OFF\nfour two zero\n", "not integers"),
+    ("short.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n", "announces 4 vertices"),
+    ("faces.off", "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", "announces 2 faces"),
+    ("corners.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n4 0 1 2\n", "face 0"),
+    ("nofaces.off", "OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n", "no faces"),
+    ("nofaces.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n", "no faces"),
+    ("empty.obj", "", "no faces"),
+    ("nofaces.ply", _PLY_HEADER.format(v=3, f=0) + "0 0 0\n1 0 0\n0 1 0\n", "no faces"),
+])
+def test_hostile_file_is_one_line_naming_it(tmp_path, name, text, needle):
+    src, out = tmp_path / name, tmp_path / "out.obj"
+    src.write_text(text)
+    r = _run(src, out)
+    _one_line_error(r, str(src), needle)
+    assert not out.exists() and not (tmp_path / "out_uv.png").exists()
+
+
+def test_batch_reports_a_hostile_file_as_one_line_and_goes_on(tmp_path):
+    src = tmp_path / "in"
+    src.mkdir()
+    _grid_obj(src / "grid.obj")
+    (src / "empty.off").write_text("")
+    (src / "flat.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\n")
+    out = tmp_path / "out"
+    r = _run(src, out, "--jobs", "2")
+    text = r.stdout + r.stderr
+    assert r.returncode == 1, text
+    assert "Traceback" not in text
+    lines = {name: [ln for ln in r.stdout.splitlines() if ln.split("] ")[-1].startswith(name + ":")]
+             for name in ("grid.obj", "empty.off", "flat.obj")}
+    assert all(len(found) == 1 for found in lines.values()), text
+    assert "empty file" in lines["empty.off"][0] and "no faces" in lines["flat.obj"][0], text
+    assert "3 files, 1 ok, 2 not" in r.stdout, text
+    assert sorted(p.name for p in out.iterdir()) == ["grid.obj", "grid_uv.png"]
+
+
+def _write_soup(path: Path, positions, faces) -> None:
+    """``positions`` and ``faces`` (vertex indices from 0) as .obj, .off or ascii .ply."""
+    if path.suffix == ".obj":
+        text = ("".join(f"v {x} {y} {z}\n" for x, y, z in positions)
+                + "".join("f " + " ".join(str(i + 1) for i in f) + "\n" for f in faces))
+    elif path.suffix == ".off":
+        text = (f"OFF\n{len(positions)} {len(faces)} 0\n"
+                + "".join(f"{x} {y} {z}\n" for x, y, z in positions)
+                + "".join(f"{len(f)} " + " ".join(map(str, f)) + "\n" for f in faces))
+    else:
+        text = (_PLY_HEADER.format(v=len(positions), f=len(faces))
+                + "".join(f"{x} {y} {z}\n" for x, y, z in positions)
+                + "".join(f"{len(f)} " + " ".join(map(str, f)) + "\n" for f in faces))
+    path.write_text(text)
+
+
+def _obj_faces(path: Path):
+    """The faces of an OBJ file, each as the sorted list of its vertices (from 0)."""
+    return sorted(sorted(int(tok.split("/")[0]) - 1 for tok in ln.split()[1:])
+                  for ln in path.read_text().splitlines() if ln.startswith("f "))
+
+
+@pytest.mark.parametrize("suffix", [".obj", ".off", ".ply"])
+def test_face_naming_a_vertex_twice_is_repaired_the_same_way_and_reported(tmp_path, suffix):
+    positions = [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (2, 0, 0.3), (2, 1, 0.3)]
+    faces = [[0, 1, 1, 2, 3],   # a quad with a corner written twice: merged back to a quad
+             [1, 4, 5, 2],      # a plain quad
+             [1, 4, 1],         # two distinct vertices: removed
+             [4, 5, 2, 5]]      # vertex 5 twice, apart: removed
+    src, out, report = tmp_path / f"rep{suffix}", tmp_path / "out.obj", tmp_path / "r.json"
+    _write_soup(src, positions, faces)
+    r = _run(src, out, "--report", report)
+    assert r.returncode == 0, r.stdout + r.stderr
+    # Both kept faces are in the output, whatever the format (the importers differ), on the
+    # file's vertices.
+    assert len([ln for ln in out.read_text().splitlines() if ln.startswith("v ")]) == 6
+    assert _obj_faces(out) == [[0, 1, 2, 3], [1, 2, 4, 5]]
+    # Never silent: one line names every repaired face, the report lists them.
+    said = [ln for ln in r.stdout.splitlines() if "naming a vertex more than once" in ln]
+    assert len(said) == 1, r.stdout
+    assert "3 faces" in said[0] and "1 merged, 2 removed" in said[0], said[0]
+    base = 1 if suffix == ".obj" else 0  # vertices numbered as the file numbers them
+    assert f"face 0 ({' '.join(str(i + base) for i in faces[0])} -> " in said[0], said[0]
+    for f in (2, 3):
+        assert f"face {f} ({' '.join(str(i + base) for i in faces[f])} -> removed)" in said[0]
+    import json
+
+    repairs = json.loads(report.read_text())["repairs"]
+    assert [(d["face"], d["kept"] is None) for d in repairs] == [(0, False), (2, True), (3, True)]
+    assert sorted(repairs[0]["kept"]) == [i + base for i in (0, 1, 2, 3)]
+
+
+def test_file_without_repeated_vertices_reports_no_repair(tmp_path):
+    src, out, report = tmp_path / "grid.obj", tmp_path / "out.obj", tmp_path / "r.json"
+    _grid_obj(src)
+    r = _run(src, out, "--report", report)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "naming a vertex" not in r.stdout
+    import json
+
+    assert json.loads(report.read_text())["repairs"] == []
+
+
+def _blend_with_group(path: Path, group: str) -> None:
+    """A closed box saved as .blend, with a vertex group ``group`` on its top face."""
+    import bpy
+
+    sys.path.insert(0, str(REPO / "blender_scripts"))
+    import common
+
+    common.reset_scene()
+    obj_path = path.with_suffix(".obj")
+    _closed_box_obj(obj_path)
+    bpy.ops.wm.obj_import(filepath=str(obj_path))
+    obj = next(o for o in bpy.context.scene.objects if o.type == "MESH")
+    top = [v.index for v in obj.data.vertices if v.co.z > 3.5]
+    obj.vertex_groups.new(name=group).add(top, 1.0, "REPLACE")
+    bpy.ops.wm.save_as_mainfile(filepath=str(path), copy=True)
+    common.reset_scene()
+
+
+def test_avoid_group_that_does_not_exist_is_one_line(tmp_path):
+    blend, out = tmp_path / "box.blend", tmp_path / "out.obj"
+    _blend_with_group(blend, "Face")
+    r = _run(blend, out, "--avoid-group", "Nose")
+    _one_line_error(r, "--avoid-group", "'Nose'", str(blend), "'Face'")
+    assert not out.exists()
+    # a format without vertex groups
+    src = tmp_path / "box.obj"
+    r = _run(src, out, "--avoid-group", "Face")
+    _one_line_error(r, "--avoid-group", "'Face'", str(src), "no vertex groups")
+    assert not out.exists()
+    # a group that steers nothing
+    r = _run(blend, out, "--avoid-group", "Face", "--no-auto-seams")
+    _one_line_error(r, "--avoid-group", "--no-auto-seams")
+    assert not out.exists()
+    # the group that exists is used
+    r = _run(blend, out, "--avoid-group", "Face", "--method", "lscm")
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert out.is_file()
