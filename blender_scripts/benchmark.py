@@ -279,6 +279,11 @@ def main(argv=None):
     parser.add_argument("--closed", action="store_true",
                         help="the closed-mesh table instead: automatic seams against Smart UV "
                              "Project + ANGLE_BASED and xatlas (see closed_benchmark.py)")
+    parser.add_argument("--open", action="store_true",
+                        help="the same table for open and multi-part meshes (bunny_open, "
+                             "suzanne, teapot_parts, three_parts); with --closed: both")
+    parser.add_argument("--dump-uv", type=Path, default=None,
+                        help="with --closed/--open: write every row's map to DIR/<mesh>__<row>.npz")
     parser.add_argument("--phases", action="store_true",
                         help="per-phase seconds of the add-on's operator (read, solve, quality, "
                              "write, pack, mode, other)")
@@ -288,12 +293,12 @@ def main(argv=None):
     parser.add_argument("--threads", type=int, default=0,
                         help="threads of the core's pool (RAYON_NUM_THREADS; default: all cores)")
     args = parser.parse_args(argv)
-    if args.closed:
+    if args.closed or args.open:
         import closed_benchmark
 
         names = [n for n in args.meshes.split(",") if n]
-        chosen = [f for f in closed_benchmark.CLOSED if not names or f.split(".")[0] in names]
-        text = closed_benchmark.run(chosen, args.repeat)
+        chosen = closed_benchmark.select(names, closed=args.closed, open_=args.open)
+        text = closed_benchmark.run(chosen, args.repeat, dump_uv=args.dump_uv)
         print()
         print(text)
         if args.out:
