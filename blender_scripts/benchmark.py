@@ -286,7 +286,9 @@ def main(argv=None):
                         help="with --closed/--open: write every row's map to DIR/<mesh>__<row>.npz")
     parser.add_argument("--phases", action="store_true",
                         help="per-phase seconds of the add-on's operator (read, solve, quality, "
-                             "write, pack, mode, other)")
+                             "write, pack, mode, other); with --closed/--open: the core's "
+                             "pipeline phases (cut planning, first solves, repair rounds and "
+                             "pieces, splits) of each mesh and the call against xatlas")
     parser.add_argument("--large", action="store_true",
                         help="also the slow large cases disk_840k and disk_300k (disks of "
                              "839,808 and 294,912 triangles)")
@@ -298,7 +300,7 @@ def main(argv=None):
 
         names = [n for n in args.meshes.split(",") if n]
         chosen = closed_benchmark.select(names, closed=args.closed, open_=args.open)
-        text = closed_benchmark.run(chosen, args.repeat, dump_uv=args.dump_uv)
+        text = closed_benchmark.run(chosen, args.repeat, dump_uv=args.dump_uv, phases=args.phases)
         print()
         print(text)
         if args.out:

@@ -520,14 +520,32 @@ def targets(r, xatlas_row, parts):
     return "; ".join(cells), len(missed)
 
 
-def run(meshes, repeat, dump_uv=None):
-    """Measure ``meshes`` (items of ``select``) and return the table and target lines."""
+def phase_line(uvflat, name, method, positions, corner_verts, face_sizes, xatlas_row):
+    """The core's pipeline phases of one direct ``uvflat.unwrap`` of the mesh (auto seams on,
+    the operator's defaults): seconds per step (per-chart steps summed over threads) and the
+    repair counts, and the whole call against the xatlas row's seconds."""
+    t0 = time.perf_counter()
+    r = uvflat.unwrap(positions, corner_verts, face_sizes, method=method)
+    seconds = time.perf_counter() - t0
+    p = r.phases
+    ratio = f", {seconds / xatlas_row['seconds']:.2f}× xatlas" if xatlas_row else ""
+    return (f"- {name} · uvflat {method} phases: build charts {p['build_charts']:.3f} s, "
+            f"plan cuts {p['plan_cuts']:.3f} s, first solves {p['solve']:.3f} s, repair solves "
+            f"{p['repair_solve']:.3f} s ({p['repair_rounds']} rounds, {p['repair_pieces']} pieces, "
+            f"{p['splits']} splits), measure {p['measure']:.3f} s; whole call {seconds:.3f} s"
+            f"{ratio}, {len(r.charts)} islands")
+
+
+def run(meshes, repeat, dump_uv=None, phases=False):
+    """Measure ``meshes`` (items of ``select``) and return the table and target lines (and,
+    with ``phases``, one line per uvflat method with the core's pipeline phases)."""
     import uvflat
 
     addon = common.load_addon()
     mesh_io = addon.mesh_io
     lines = [HEADER, "|" + "---|" * (HEADER.count("|") - 1)]
     target_lines = []
+    phase_lines = []
     if dump_uv is not None:
         dump_uv = Path(dump_uv)
         dump_uv.mkdir(parents=True, exist_ok=True)
@@ -551,4 +569,13 @@ def run(meshes, repeat, dump_uv=None):
                 verdict = "all targets met" if not missed else f"{missed} target(s) MISSED"
                 target_lines.append(f"- {name} · {r['label']}: {verdict}: {text}")
                 print(target_lines[-1], flush=True)
-    return "\n".join(lines) + "\n\nTargets of the uvflat rows:\n\n" + "\n".join(target_lines)
+        if phases:
+            for method in ("abf", "slim"):
+                phase_lines.append(phase_line(uvflat, name, method, positions.astype(np.float64),
+                                              corner_verts, face_sizes, xatlas_row))
+                print(phase_lines[-1], flush=True)
+    text = "\n".join(lines) + "\n\nTargets of the uvflat rows:\n\n" + "\n".join(target_lines)
+    if phase_lines:
+        text += ("\n\nPipeline phases (one direct uvflat.unwrap per method; per-chart steps summed "
+                 "over threads):\n\n" + "\n".join(phase_lines))
+    return text

@@ -37,4 +37,4 @@ pub use methods::{method_names, BoundaryShape, Method, OptionValue, SpectralOpti
 pub use metrics::{Distortion, MeshMetrics};
 pub use progress::Progress;
 pub use validate::validate_input;
-pub use unwrap::{plan_seams, unwrap, ChartKind, ChartReport, ChartStatus, Fit, MeshInput, Problem, UnwrapOptions, Unwrapped};
+pub use unwrap::{plan_seams, unwrap, ChartKind, ChartReport, ChartStatus, Fit, MeshInput, Phases, Problem, UnwrapOptions, Unwrapped};

@@ -11,6 +11,7 @@ use crate::metrics;
 use crate::pipeline::rule::AtlasRule;
 use crate::pipeline::{self, Context, Piece};
 pub use crate::pipeline::outcome::{ChartReport, ChartStatus, Problem};
+pub use crate::pipeline::phases::Phases;
 use crate::progress::Progress;
 
 /// Polygon soup with everything an unwrap reads from the user's mesh.
@@ -93,6 +94,8 @@ pub struct Unwrapped {
     /// triangles, the chart's UVs area-normalised); NaN elsewhere. Measured on the returned
     /// UVs, so a caller needs no second pass to colour faces by quality.
     pub face_distortion: Vec<[f64; 2]>,
+    /// Seconds per pipeline step and the repair counts.
+    pub phases: Phases,
 }
 
 impl Unwrapped {
@@ -111,6 +114,7 @@ impl Unwrapped {
 /// input. Charts that cannot be mapped (closed, higher genus, singular systems) are *not*
 /// errors: they come back with [`ChartStatus::Failed`] and a reason.
 pub fn unwrap(input: &MeshInput<'_>, options: &UnwrapOptions) -> Result<Unwrapped> {
+    let started = std::time::Instant::now();
     let mesh = crate::validate::validate_input(input, Some(&options.fit), Some(&options.method))?;
     let n_corners = mesh.n_corners();
     options.auto_seams.validate(input.positions.len())?;
@@ -129,7 +133,8 @@ pub fn unwrap(input: &MeshInput<'_>, options: &UnwrapOptions) -> Result<Unwrappe
         avoid[v as usize] = true;
     }
     let rule = AtlasRule { max_stretch: options.auto_seams.max_stretch, full: options.auto_seams.enabled };
-    let ctx = Context { mesh: &mesh, render: render.as_ref(), pins: &pin_of_corner, options, avoid: &avoid, rule };
+    let ctx = Context { mesh: &mesh, render: render.as_ref(), pins: &pin_of_corner, options, avoid: &avoid, rule, clock: Default::default() };
+    ctx.clock.add(|p| p.build_charts = started.elapsed().as_secs_f64());
     // With a Progress: charts after a cancel are skipped (None), and the unwrap is an error.
     let total = charts.len();
     if let Some(p) = &options.progress {
@@ -154,6 +159,7 @@ pub fn unwrap(input: &MeshInput<'_>, options: &UnwrapOptions) -> Result<Unwrappe
     }
     let pieces: Vec<Vec<Piece>> = pieces.into_iter().map(|p| p.unwrap_or_default()).collect();
     // Per-face quality of every mapped piece, in parallel.
+    let measured = std::time::Instant::now();
     let distortion: Vec<Vec<Vec<(u32, [f64; 2])>>> = {
         use rayon::prelude::*;
         charts
@@ -171,6 +177,7 @@ pub fn unwrap(input: &MeshInput<'_>, options: &UnwrapOptions) -> Result<Unwrappe
             })
             .collect()
     };
+    ctx.clock.add(|p| p.measure = measured.elapsed().as_secs_f64());
     let mut face_distortion = vec![[f64::NAN; 2]; mesh.n_faces()];
     for (f, d) in distortion.into_iter().flatten().flatten() {
         face_distortion[f as usize] = d;
@@ -199,7 +206,7 @@ pub fn unwrap(input: &MeshInput<'_>, options: &UnwrapOptions) -> Result<Unwrappe
     }
     new_seams.sort_unstable();
     new_seams.dedup();
-    Ok(Unwrapped { uv, face_chart, charts: reports, new_seams, non_manifold_edges, face_distortion })
+    Ok(Unwrapped { uv, face_chart, charts: reports, new_seams, non_manifold_edges, face_distortion, phases: ctx.clock.get() })
 }
 
 

@@ -173,6 +173,7 @@ pub struct PyUnwrapResult {
     pub non_manifold_edges: usize,
     pub face_conformal: Py<PyArray1<f64>>,
     pub face_area: Py<PyArray1<f64>>,
+    pub phases: uvflat_core::Phases,
 }
 
 impl PyUnwrapResult {
@@ -183,6 +184,25 @@ impl PyUnwrapResult {
 
 #[pymethods]
 impl PyUnwrapResult {
+    /// Where the time went, as a dict: ``build_charts``, ``plan_cuts``, ``solve``,
+    /// ``repair_solve``, ``measure`` (seconds; the steps of different charts run in parallel,
+    /// so ``plan_cuts``, ``solve`` and ``repair_solve`` are summed over threads), and the
+    /// counts ``repair_rounds``, ``repair_pieces`` and ``splits``.
+    #[getter]
+    fn phases<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let p = &self.phases;
+        let d = PyDict::new(py);
+        d.set_item("build_charts", p.build_charts)?;
+        d.set_item("plan_cuts", p.plan_cuts)?;
+        d.set_item("solve", p.solve)?;
+        d.set_item("repair_solve", p.repair_solve)?;
+        d.set_item("measure", p.measure)?;
+        d.set_item("repair_rounds", p.repair_rounds)?;
+        d.set_item("repair_pieces", p.repair_pieces)?;
+        d.set_item("splits", p.splits)?;
+        Ok(d)
+    }
+
     /// UV of every corner, shape (C, 2), float64; (0, 0) where a face got no UVs.
     #[getter]
     fn uv<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {

@@ -23,6 +23,7 @@
 //! ([`outcome::ChartStatus`], [`outcome::Problem`]).
 
 pub mod outcome;
+pub mod phases;
 pub mod repair;
 pub mod rule;
 pub mod solve;
@@ -51,6 +52,8 @@ pub struct Context<'a, 'm> {
     pub avoid: &'a [bool],
     /// The rule every chart is held to.
     pub rule: AtlasRule,
+    /// Seconds per step, summed over charts.
+    pub clock: phases::PhaseClock,
 }
 
 /// One solved piece of the output: an input chart as built, or a piece of it made by cuts.
@@ -110,7 +113,9 @@ fn road(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], depth: us
     if road == Triage::Cut {
         return repair::repair(ctx, chart, base_seams, depth, None);
     }
+    let t = std::time::Instant::now();
     let (report, uv) = solve::solve_chart(chart, ctx.pins, ctx.options, &ctx.rule);
+    ctx.clock.add(|p| p.solve += t.elapsed().as_secs_f64());
     let broken = !report.status.mapped() || ctx.rule.broken(&report).is_some();
     let first = Piece { chart: None, report, uv, seams: Vec::new(), area: chart_area(chart) };
     if road == Triage::SolveThenRepair && broken {

@@ -21,9 +21,11 @@ use crate::mesh::PolyMesh;
 /// Repair `chart` (already cut along `base_seams`). `first`: the chart solved as it is, if it
 /// was (it is one of the attempts). Returns the best pieces found.
 pub fn repair(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], depth: usize, first: Option<Piece>) -> Vec<Piece> {
+    let t = std::time::Instant::now();
     let mask = face_mask(ctx.mesh.n_faces(), chart);
     // Graph, costs and the scale system's analysis once; each round refactors numerically.
     let cutter = ChartCutter::new(ctx.mesh, chart, &ctx.options.auto_seams, ctx.avoid);
+    ctx.clock.add(|p| p.plan_cuts += t.elapsed().as_secs_f64());
     let mut seed: Vec<u32> = Vec::new();
     let mut best: Vec<Piece> = Vec::new();
     if let Some(p) = first {
@@ -33,6 +35,7 @@ pub fn repair(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], dep
         best.push(p);
     }
     for round in 0..=cuts::REPAIR_ROUNDS {
+        let t = std::time::Instant::now();
         let cut = cutter.cut(&seed, round);
         if cut.seams.is_empty() && !best.is_empty() {
             break;
@@ -40,6 +43,9 @@ pub fn repair(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], dep
         let mut all: Vec<[u32; 2]> = base_seams.to_vec();
         all.extend_from_slice(&cut.seams);
         let sub = build_charts_with(ctx.mesh, &all, Some(&mask), ctx.render);
+        ctx.clock.add(|p| p.plan_cuts += t.elapsed().as_secs_f64());
+        let t = std::time::Instant::now();
+        let n_pieces = sub.len();
         let mut pieces: Vec<Piece> = Vec::with_capacity(sub.len());
         for (k, c) in sub.into_iter().enumerate() {
             // A piece the cut did not open (it should not happen) breaks the rule and is
@@ -54,6 +60,11 @@ pub fn repair(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], dep
             };
             pieces.push(Piece::new(Some(c), report, uv, seams));
         }
+        ctx.clock.add(|p| {
+            p.repair_solve += t.elapsed().as_secs_f64();
+            p.repair_pieces += n_pieces;
+            p.repair_rounds += 1;
+        });
         let valid = all_valid(ctx, &pieces);
         let next = pieces
             .iter()
@@ -74,8 +85,11 @@ pub fn repair(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], dep
         }
     }
     if !all_valid(ctx, &best) && depth < cuts::MAX_SPLIT_DEPTH && chart.faces.len() >= 2 {
+        let t = std::time::Instant::now();
         let split = cuts::split::halve(cutter.graph(), chart, ctx.avoid);
+        ctx.clock.add(|p| p.plan_cuts += t.elapsed().as_secs_f64());
         if !split.is_empty() {
+            ctx.clock.add(|p| p.splits += 1);
             let mut all: Vec<[u32; 2]> = base_seams.to_vec();
             all.extend_from_slice(&split);
             let halves = build_charts_with(ctx.mesh, &all, Some(&mask), ctx.render);
