@@ -87,7 +87,7 @@ def parse_args(argv):
                         help=f"input files ({', '.join(INPUT_SUFFIXES)}), folders or glob "
                              f"patterns, then the output file ({', '.join(OUTPUT_SUFFIXES)}) or, "
                              "for several inputs, the output folder")
-    parser.add_argument("--method", default="lscm",
+    parser.add_argument("--method", default="abf",
                         help="uvflat method (tutte, harmonic, mean_value, lscm, spectral, ...)")
     parser.add_argument("--boundary", choices=("circle", "square", "virtual", "free", "convex"),
                         default=None,

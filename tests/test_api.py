@@ -143,7 +143,7 @@ def test_output_shapes_and_dtypes():
     assert r.chart.shape == (F,) and r.chart.dtype == np.int32
     assert r.face_solved.shape == (F,) and r.face_solved.dtype == np.bool_
     assert isinstance(r.seconds, float) and r.seconds >= 0.0
-    assert r.method == "lscm"
+    assert r.method == "abf"
     assert isinstance(r.charts, list) and len(r.charts) == 1
     assert np.all(r.chart == 0) and np.all(r.face_solved)
     assert np.all(np.isfinite(r.uv))
@@ -151,14 +151,16 @@ def test_output_shapes_and_dtypes():
     rep = r.charts[0]
     assert isinstance(rep, uvflat.ChartReport)
     int_fields = ["id", "faces", "triangles", "vertices", "boundary_loops", "genus", "iterations", "flips", "cones"]
-    float_fields = ["residual", "conformal", "area", "symmetric_dirichlet", "seconds", "cut_length"]
+    float_fields = ["residual", "conformal", "area", "symmetric_dirichlet", "seconds", "cut_length",
+                    "density_p5", "density_p95", "density_outside"]
     for f in int_fields:
         assert isinstance(getattr(rep, f), int), f
     for f in float_fields:
         assert isinstance(getattr(rep, f), float), f
     assert isinstance(rep.overlap, bool)
     assert rep.reason is None or isinstance(rep.reason, str)
-    assert (rep.id, rep.method, rep.kind, rep.status) == (0, "lscm", "disk", "solved")
+    assert (rep.id, rep.method, rep.kind, rep.status) == (0, "abf", "disk", "solved")
+    assert 0.0 <= rep.density_outside <= 0.05 and rep.density_p5 <= 1.0 <= rep.density_p95
     assert (rep.faces, rep.triangles, rep.vertices) == (12, 24, 20)
     assert (rep.boundary_loops, rep.genus) == (1, 0)
 
@@ -824,7 +826,8 @@ def test_abf_angle_sums_make_a_rectangle():
     outer = np.arange((rings - 1) * n + 1, rings * n + 1)
     corners = outer[:: n // 4]
     sums = np.where(np.isin(outer, corners), math.pi / 2, math.pi)
-    r = uvflat.unwrap(pos, cv, fs, method="abf", angle_sums=(outer, sums))
+    # The prescribed corners, uncut: automatic seams would hold the square to the density rule.
+    r = uvflat.unwrap(pos, cv, fs, method="abf", angle_sums=(outer, sums), auto_seams=False)
     (rep,) = r.charts
     assert rep.status == "solved", rep.reason
     assert rep.flips == 0 and not rep.overlap
@@ -941,7 +944,7 @@ def test_abf_convex_boundary_on_suzanne_with_her_seams():
     assert len(seams) > 0
     convex_somewhere = False
     for boundary in ("free", "convex"):
-        r = uvflat.unwrap(pos, cv, fs, method="abf", seams=seams, boundary=boundary)
+        r = uvflat.unwrap(pos, cv, fs, method="abf", seams=seams, boundary=boundary, auto_seams=False)
         assert len(r.charts) >= 2
         for rep in r.charts:
             faces = np.flatnonzero(r.chart == rep.id)
@@ -976,7 +979,7 @@ def test_help_shows_signature_and_documentation():
 
     sig = inspect.signature(uvflat.unwrap)
     assert list(sig.parameters)[:3] == ["positions", "corner_verts", "face_sizes"]
-    assert sig.parameters["method"].default == "lscm"
+    assert sig.parameters["method"].default == "abf"
     assert sig.parameters["method"].kind is inspect.Parameter.KEYWORD_ONLY
     text = pydoc.render_doc(uvflat.unwrap, renderer=pydoc.plaintext)
     assert "See the package documentation" not in text
@@ -1265,7 +1268,7 @@ def test_result_carries_the_per_face_distortion_of_its_uvs(method):
     seams = np.array([[4 + 9 * j, 4 + 9 * (j + 1)] for j in range(6)])
     selected = np.ones(len(fs), dtype=bool)
     selected[[0, 1, 10]] = False
-    r = uvflat.unwrap(pos, cv, fs, method=method, seams=seams, selected=selected)
+    r = uvflat.unwrap(pos, cv, fs, method=method, seams=seams, selected=selected, auto_seams=False)
     solved = np.asarray(r.face_solved)
     assert solved.sum() == selected.sum() and len(r.charts) == 2
     m = uvflat.metrics(pos, cv, fs, r.uv, selected=solved)
@@ -1328,3 +1331,84 @@ def test_island_hulls_report_islands_without_area_and_bad_input():
     assert list(np.diff(offsets)) == [0]
     with pytest.raises(uvflat.InputError):
         uvflat.island_hulls(uv, face_sizes, np.array([0.0, 1.0, 2.0]))
+
+
+@pytest.mark.parametrize("falsy", [np.False_, 0, "", 0.0])
+def test_any_false_progress_value_cancels(falsy):
+    pos, cv, fs = _disks(5)
+    with pytest.raises(uvflat.Cancelled):
+        uvflat.unwrap(pos, cv, fs, progress=lambda done, total: falsy)
+
+
+@pytest.mark.parametrize("truthy", [None, True, np.True_, 1])
+def test_none_or_true_progress_values_go_on(truthy):
+    pos, cv, fs = _disks(5)
+    r = uvflat.unwrap(pos, cv, fs, progress=lambda done, total: truthy)
+    assert len(r.charts) == 5
+
+
+def test_plan_seams_are_the_seams_unwrap_adds():
+    pos, cv, fs = cube()
+    for method in ("abf", "slim"):
+        planned = uvflat.plan_seams(pos, cv, fs, method=method)
+        r = uvflat.unwrap(pos, cv, fs, method=method)
+        assert planned.dtype == np.uint32 and planned.shape[1] == 2 and len(planned) > 0
+        np.testing.assert_array_equal(planned, r.new_seams)
+    assert len(uvflat.plan_seams(pos, cv, fs, auto_seams=False)) == 0
+
+
+def _density_outside(pos, cv, fs, uv, chart, bound=2.0):
+    """Share of 3D area outside [1/bound, bound] of its island's density (fan triangles)."""
+    starts = np.concatenate([[0], np.cumsum(fs)[:-1]])
+    num = den = 0.0
+    tris = [(f, starts[f], starts[f] + k, starts[f] + k + 1) for f in range(len(fs)) for k in range(1, fs[f] - 1)]
+    a3 = {}
+    a2 = {}
+    for f, a, b, c in tris:
+        p = pos[cv[[a, b, c]]]
+        q = uv[[a, b, c]]
+        a3[(f, b)] = 0.5 * np.linalg.norm(np.cross(p[1] - p[0], p[2] - p[0]))
+        e1, e2 = q[1] - q[0], q[2] - q[0]
+        a2[(f, b)] = 0.5 * (e1[0] * e2[1] - e1[1] * e2[0])
+    for island in np.unique(chart):
+        keys = [k for k in a3 if chart[k[0]] == island]
+        s3 = sum(a3[k] for k in keys)
+        s2 = sum(a2[k] for k in keys)
+        sign = 1.0 if s2 >= 0 else -1.0
+        s2 = sum(max(sign * a2[k], 0.0) for k in keys)
+        for k in keys:
+            r = max(sign * a2[k], 0.0) / a3[k] / (s2 / s3)
+            if not (1 / bound <= r <= bound):
+                num += a3[k]
+        den += s3
+    return num / den
+
+
+def test_density_spread_matches_its_definition():
+    # A bumpy grid whose LSCM map stretches: the reported share equals the definition's.
+    pos, cv, fs = grid(8, 6, triangles=True)
+    pos = np.asarray(pos, dtype=float).copy()
+    pos[:, 2] = 1.2 * np.sin(3.0 * pos[:, 0]) * np.cos(2.0 * pos[:, 1])
+    r = uvflat.unwrap(pos, cv, fs, method="lscm", auto_seams=False)
+    want = _density_outside(pos, cv, fs, r.uv, np.asarray(r.chart), bound=2.0)
+    m = uvflat.metrics(pos, cv, fs, r.uv)
+    assert abs(m.density_outside - want) < 1e-9, (m.density_outside, want)
+    assert m.density_p5 <= 1.0 <= m.density_p95
+    assert abs(r.charts[0].density_outside - want) < 1e-9  # the report, against max_stretch = 2
+    assert abs(m.per_chart[0]["density_outside"] - want) < 1e-9
+    # A tighter bound counts at least as much.
+    r3 = uvflat.unwrap(pos, cv, fs, method="lscm", auto_seams=False, max_stretch=1.2)
+    assert r3.charts[0].density_outside >= want
+
+
+def test_phases_account_for_the_pipeline():
+    pos, cv, fs = cube()
+    r = uvflat.unwrap(pos, cv, fs, method="abf")
+    p = r.phases
+    assert set(p) == {"build_charts", "plan_cuts", "solve", "repair_solve", "measure",
+                      "repair_rounds", "repair_pieces", "splits"}
+    assert all(v >= 0 for v in p.values())
+    # A closed cube is cut: planned and solved in at least one repair round.
+    assert p["repair_rounds"] >= 1 and p["repair_pieces"] >= 1 and p["plan_cuts"] > 0
+    r = uvflat.unwrap(pos, cv, fs, method="abf", auto_seams=False)
+    assert r.phases["repair_rounds"] == 0 and r.phases["plan_cuts"] == 0
