@@ -11,13 +11,14 @@ from __future__ import annotations
 if "bpy" in locals():  # reload support (F3 > Reload Scripts)
     import importlib
 
-    for _name in ("mesh_io", "methods", "aspect", "distortion", "proxy_pack", "engine", "operators", "ui"):
+    for _name in ("mesh_io", "methods", "aspect", "distortion", "packing", "proxy_pack", "engine",
+                  "operators", "ui"):
         if _name in locals():
             importlib.reload(locals()[_name])
 
 import bpy
 
-from . import aspect, distortion, engine, mesh_io, methods, operators, proxy_pack, ui
+from . import aspect, distortion, engine, mesh_io, methods, operators, packing, proxy_pack, ui
 
 classes = operators.classes + ui.classes
 

@@ -34,6 +34,14 @@ def material_image(obj):
     return None
 
 
+def material_aspect(obj) -> float:
+    """``width / height`` of the image of ``obj``'s active material (1.0 when there is none):
+    the aspect Blender's packer works in (it rotates islands in that image's pixels)."""
+    image = material_image(obj)
+    size = _image_size(image) if image is not None else None
+    return size[0] / size[1] if size is not None else 1.0
+
+
 def image_aspect(context, obj) -> float:
     """``width / height`` of the texture ``obj``'s UVs are for (1.0 when unknown)."""
     space = getattr(context, "space_data", None)

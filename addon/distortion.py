@@ -132,8 +132,8 @@ def face_flips(uv, face_sizes, chart, solved, triangles=None, corner_verts=None,
     frame of half-size 1). A quad counts the flips of the worse of its two diagonal splits, so
     a quad folded on either diagonal is flipped; a quad at a vertex inside its chart shared by
     two faces only counts its split through that vertex (``corner_verts`` and ``corner_edges``
-    find those vertices). Only ``solved`` faces of a chart (>= 0) are
-    looked at; every other face counts 0."""
+    find those vertices). Only ``solved`` faces of a chart (>= 0) are looked at; every other
+    face counts 0."""
     uv = np.asarray(uv, dtype=np.float64)
     face_sizes = np.asarray(face_sizes, dtype=np.int64)
     n_f = len(face_sizes)

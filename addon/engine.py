@@ -9,7 +9,9 @@ Order of work, so that a failure never leaves a UV map half written:
 3. write the new UVs of solved faces only (failed charts and unselected faces keep their
    old UVs bit for bit);
 4. pack the new islands with Blender's own packer (``bpy.ops.uv.pack_islands``), skipping
-   islands that hold pinned UVs, then put the selection back exactly as it was;
+   islands that hold pinned UVs, each into the UDIM tile its faces were in and, around
+   existing islands, at their texel density (:func:`_pack`), then put the selection back
+   exactly as it was;
 5. re-enter edit mode.
 
 If anything raises after step 3 started, every UV map is restored from the copies taken in
@@ -18,6 +20,7 @@ step 2 (and UV maps created by step 3 are removed) before the error propagates.
 
 from __future__ import annotations
 
+import dataclasses
 import threading
 import time
 from dataclasses import dataclass, field
@@ -25,7 +28,7 @@ from dataclasses import dataclass, field
 import bpy
 import numpy as np
 
-from . import aspect, distortion, mesh_io, proxy_pack
+from . import aspect, distortion, mesh_io, packing, proxy_pack
 
 
 # Summary of the last successful run (for batch scripts and tests).
@@ -73,6 +76,13 @@ class Summary:
     cones: int = 0         # cone singularities placed by automatic seams
     seams_marked: bool = False
     non_manifold_edges: int = 0  # edges of 3+ selected faces, treated as seams
+    flipped_faces: int = 0  # faces holding the flipped triangles (what Select Flipped selects)
+    pack_shapes: tuple = ()  # island shapes Blender's packer was given (see pack_shape)
+    pack_shape: str = ""     # the shape asked for
+    # UV area of the packed islands over the area of the squares bounding them (one per UDIM
+    # tile packed into; with Around Others the tile's other islands count too); None when
+    # nothing was packed
+    coverage: float | None = None
     results: dict = field(default_factory=dict)  # object name -> uvflat.UnwrapResult
     # Seconds per phase of the last run (for benchmarks); they add up to ``seconds``:
     # "read", "solve", "quality" (the core's measure of the per-face distortion), "write"
@@ -107,6 +117,14 @@ class Summary:
         flips = self.flipped_triangles
         if flips:
             text += f"; {flips} flipped triangle{'s' * (flips != 1)}"
+            faces = self.flipped_faces
+            if faces:
+                text += f" in {faces} face{'s' * (faces != 1)} (Select Flipped)"
+        if self.coverage is not None:
+            text += f"; tile coverage {100 * self.coverage:.0f}%"
+        cheaper = [s for s in self.pack_shapes if s != self.pack_shape]
+        if self.pack_shape and cheaper:
+            text += f"; many islands: packed as {' and '.join(SHAPE_NAMES[s] for s in cheaper)}"
         if self.needs_attention or self.fallback or flips:
             text += " - see the uvflat sidebar"
         return text
@@ -115,6 +133,9 @@ class Summary:
     def flipped_triangles(self) -> int:
         return sum(int(getattr(c, "flips", 0)) for r in self.results.values() for c in r.charts
                    if c.status != "failed")
+
+
+SHAPE_NAMES = {"CONCAVE": "exact shapes", "CONVEX": "convex hulls", "AABB": "bounding boxes"}
 
 
 def _grouped(problems, shown=2) -> str:
@@ -173,6 +194,7 @@ class _Job:
     seams: np.ndarray | None = None  # (S,2) seam vertex pairs
     quality: dict | None = None      # distortion attributes as they were before writing
     aspect: float = 1.0              # width / height of the texture (correct aspect)
+    flipped_faces: int = 0           # faces holding flipped triangles (uvflat_flipped)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -254,14 +276,24 @@ def _read_avoid_groups(context, objects, in_mode, active, group):
     return out
 
 
+def _solved_faces(job: _Job):
+    """Selected faces that received UVs."""
+    return np.asarray(job.result.face_solved, dtype=bool) & job.selected
+
+
 def _mark_new_seams(job: _Job) -> int:
-    """Mark the edges cut by automatic seams as seams; returns how many were new."""
+    """Mark the edges cut by automatic seams as seams; returns how many were new. Only cuts
+    along a face that received UVs are marked: a chart that failed keeps its UVs and its seams."""
     new = np.asarray(getattr(job.result, "new_seams", ()))
     if not len(new):
         return 0
     mesh = job.obj.data
     _, use_seam = mesh_io.read_edges(mesh)
     add = mesh_io.seam_mask_of_pairs(mesh, new) & ~use_seam
+    solved_edges = np.zeros(len(use_seam), dtype=bool)
+    corners = np.repeat(_solved_faces(job), job.face_sizes)
+    solved_edges[mesh_io.read_corner_edges(mesh)[corners]] = True
+    add &= solved_edges
     if not add.any():
         return 0
     job.old_seams = use_seam.copy()
@@ -299,6 +331,11 @@ def _solve(core, job: _Job, method, options, use_fit, progress=None):
 
 
 def _write(job: _Job, phases=None, color_kind=None):
+    """Write the new UVs of the solved faces and their quality attributes. A job where no face
+    was solved writes nothing at all (no UV map is created, no attribute changes)."""
+    solved = _solved_faces(job)
+    if not solved.any():
+        return
     mesh = job.obj.data
     name, job.created_uv = mesh_io.ensure_uv_map(mesh)
     job.written = True  # from here on, _restore must undo this job
@@ -306,13 +343,13 @@ def _write(job: _Job, phases=None, color_kind=None):
         job.uv_name = name
         job.old_uv = mesh_io.read_uv(mesh, name)
     new_uv = job.old_uv.copy()
-    solved = np.asarray(job.result.face_solved, dtype=bool) & job.selected
     corners = np.repeat(solved, job.face_sizes)
     np.copyto(new_uv, np.asarray(job.result.uv), where=corners[:, None])
     # per-face quality of the returned UVs (before the aspect correction; packing moves
     # islands by similarities only, which changes none of it)
     t0 = time.perf_counter()
-    quality = distortion.measure(job, new_uv, solved)
+    quality = distortion.measure(job, solved)
+    job.flipped_faces = int(np.count_nonzero(quality[2]))
     if phases is not None:
         _lap(phases, "quality", t0)
     if job.aspect != 1.0:
@@ -362,11 +399,13 @@ def _restore(jobs):
 class PackSettings:
     """How the new islands are packed (Blender's ``uv.pack_islands`` options).
 
-    ``mode``: ``AROUND`` packs the new islands into the free space of the 0-1 tile, every
-    other island of the UV map locked in place (Blender's packer with pinned islands locked);
-    ``ALL`` packs the new islands over the whole tile as Blender's own Unwrap does (other
-    islands are not moved, but may be overlapped); ``OFF`` fits each new island to where its
-    faces' previous UVs were.
+    ``mode``: ``AROUND`` packs the new islands into the free space of the UDIM tile their
+    faces were in, every other island of the UV map locked in place (Blender's packer with
+    pinned islands locked) and its texel density kept; ``ALL`` packs the new islands over the
+    whole tile, scaled to fill it, as Blender's own Unwrap does (other islands are not moved,
+    but may be overlapped); ``OFF`` fits each new island to where its faces' previous UVs were.
+    ``shape_method`` is the shape asked for (see :func:`pack_shape`); ``orient`` turns the
+    new islands to their smallest bounding box first.
     """
 
     mode: str = "AROUND"
@@ -374,6 +413,12 @@ class PackSettings:
     margin_method: str = "SCALED"
     shape_method: str = "CONCAVE"
     rotate: bool = True
+    orient: bool = True  # new islands turned to their smallest bounding box first
+
+    @property
+    def rotate_method(self) -> str:
+        """How Blender's packer may rotate: oriented islands by quarter turns only."""
+        return "CARDINAL" if self.orient else "ANY"
 
 
 def _locked_faces(job: _Job, packed):
@@ -384,86 +429,298 @@ def _locked_faces(job: _Job, packed):
     return ~packed & ~mesh_io.read_hidden_faces(job.obj.data)
 
 
+@dataclass
+class _PackPlan:
+    """The packing of one job's new islands (see :func:`_pack`)."""
+
+    job: _Job
+    faces: np.ndarray            # (F,) faces packed now
+    locked: np.ndarray           # (F,) faces packed around (AROUND), in any tile
+    island: np.ndarray           # (F,) island of every packed face, -1 elsewhere
+    tiles: np.ndarray            # (n_islands, 2) UDIM tile of every island
+    face_tile: np.ndarray        # (F, 2) UDIM tile of every face (current UVs)
+    uv: np.ndarray               # (C, 2) float64: the UVs as they are being packed
+    area3: np.ndarray            # (F,) surface area of every face
+    area_uv: np.ndarray          # (F,) UV area of every face (as written)
+    reference: float | None = None  # UV area per surface area of the locked faces
+    keep_angle: bool = False     # the packer must not rotate these islands (see _pack)
+
+
+def _plan(job: _Job, faces, locked) -> _PackPlan:
+    written = mesh_io.read_uv(job.obj.data, job.uv_name)
+    chart = np.asarray(job.result.chart, dtype=np.int64)
+    ids, inverse = np.unique(chart[faces], return_inverse=True)
+    island = np.full(len(chart), -1, dtype=np.int64)
+    island[faces] = inverse
+    old = np.zeros_like(written) if job.created_uv else job.old_uv
+    area3, area_uv = packing.face_areas(job.positions, job.corner_verts, job.face_sizes,
+                                        job.triangles, written)
+    plan = _PackPlan(job, faces, locked, island,
+                     packing.island_tiles(old, job.face_sizes, island, len(ids)),
+                     packing.face_tiles(written, job.face_sizes), written.astype(np.float64),
+                     area3, area_uv)
+    plan.reference = packing.density(area3, area_uv, locked) if locked.any() else None
+    return plan
+
+
+def _island_ratio(plan: _PackPlan):
+    """UV area per surface area of every new island."""
+    n = len(plan.tiles)
+    inside = plan.island >= 0
+    area3 = np.bincount(plan.island[inside], weights=plan.area3[inside], minlength=n)
+    area_uv = np.bincount(plan.island[inside], weights=plan.area_uv[inside], minlength=n)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return area_uv / area3
+
+
+# Islands from which Blender's packer is given a cheaper shape than the one asked for. Its
+# exact (concave) and convex shapes are searched island against island: a handful of
+# islands takes it a fraction of a second, a few tens of them tens of seconds (30 one-face
+# islands: 41 s), bounding boxes a millisecond whatever their number. Islands of one or two
+# faces count several times (many same-sized tiny islands are its slowest case).
+CONCAVE_MAX_ISLANDS = 8
+CONVEX_MAX_ISLANDS = 16
+TINY_ISLAND_FACES = 2
+TINY_ISLAND_WEIGHT = 4
+
+
+def pack_shape(shape_method, islands, tiny=0) -> str:
+    """The island shape Blender's packer is given for ``islands`` new islands (``tiny`` of
+    them of at most :data:`TINY_ISLAND_FACES` faces): the one asked for, or the first cheaper
+    one (convex hulls, then bounding boxes) when there are too many islands for it."""
+    pieces = islands + (TINY_ISLAND_WEIGHT - 1) * tiny
+    shape = shape_method
+    if shape == "CONCAVE" and pieces > CONCAVE_MAX_ISLANDS:
+        shape = "CONVEX"
+    if shape == "CONVEX" and pieces > CONVEX_MAX_ISLANDS:
+        shape = "AABB"
+    return shape
+
+
+def _island_counts(plan, faces):
+    """``(islands, tiny islands)`` among the islands of ``faces`` of ``plan``."""
+    sizes = np.bincount(plan.island[faces])
+    sizes = sizes[sizes > 0]
+    return len(sizes), int(np.count_nonzero(sizes <= TINY_ISLAND_FACES))
+
+
 def _pack(context, jobs, in_mode, active, settings: PackSettings, only=None, phases=None) -> bool:
     """Pack the islands of the solved, unpinned charts with Blender's packer (of the jobs in
     ``only``, default all), around the locked islands when ``settings.mode == "AROUND"``.
 
-    The selection (and, around locked islands, the pin flags) are changed for the packer and
-    put back exactly afterwards. Returns True when the objects were left in edit mode (nothing
-    had to be put back).
+    Every new island goes into the UDIM tile its faces were in (``packing``), packed around
+    that tile's locked islands; around existing islands the new ones get the texel density of
+    the islands left alone and the packer scales nothing. Blender's packer rotates in the
+    pixels of the object's texture: islands not corrected for a non-square one would be
+    sheared, so they are turned to their smallest bounding box here and packed unrotated.
+
+    Islands are turned to their smallest bounding box first with ``settings.orient``. The
+    selection (and, around locked islands, the pin flags) are changed for the packer and put
+    back exactly afterwards. Runs from object mode and returns to it (returns False: the
+    objects are not left in edit mode).
     """
     around = settings.mode == "AROUND"
-    pack_sets = []
     chosen = None if only is None else {id(job) for job in only}
+    plans = []
     for job in jobs:
-        faces = (_pack_faces(job) if chosen is None or id(job) in chosen
-                 else np.zeros_like(job.selected))
-        locked = _locked_faces(job, faces) if around and faces.any() else np.zeros_like(faces)
-        pack_sets.append((job, faces, locked))
-    if not any(faces.any() for _, faces, _ in pack_sets):
+        if job.uv_name is None or not job.written or (chosen is not None and id(job) not in chosen):
+            continue
+        faces = _pack_faces(job)
+        if not faces.any():
+            continue
+        locked = _locked_faces(job, faces) if around else np.zeros_like(faces)
+        plans.append(_plan(job, faces, locked))
+    if not plans:
         return False
-    if _pack_by_proxy(context, pack_sets, settings, phases):
-        return False
-    change = [(job, faces, locked) for job, faces, locked in pack_sets
-              if locked.any() or not np.array_equal(faces, job.raw_selected)]
+    core = import_core()
+    # texel density of the map packed around: each mesh's own, else all of them together
+    reference = None
+    if around:
+        area3 = sum(float(p.area3[p.locked & (p.area_uv > 0)].sum()) for p in plans)
+        area_uv = sum(float(p.area_uv[p.locked & (p.area3 > 0)].sum()) for p in plans)
+        reference = area_uv / area3 if area3 > 0 and area_uv > 0 else None
+    keep_density = reference is not None
+    transformed = False
+    for plan in plans:
+        job = plan.job
+        if keep_density:
+            ratio = _island_ratio(plan)
+            target = plan.reference if plan.reference is not None else reference
+            good = np.isfinite(ratio) & (ratio > 0)
+            factors = np.where(good, np.sqrt(target / np.where(good, ratio, 1.0)), 1.0)
+            packing.scale_islands(plan.uv, job.face_sizes, plan.island, factors)
+            transformed = True
+        plan.keep_angle = (settings.rotate and aspect.material_aspect(job.obj) != 1.0
+                           and job.aspect == 1.0)
+        if plan.keep_angle or settings.orient:
+            offsets, points = core.island_hulls(plan.uv, job.face_sizes.astype(np.int64),
+                                                np.maximum(plan.island, 0), selected=plan.faces)
+            if np.all(np.diff(offsets) >= 3):
+                packing.rotate_islands(plan.uv, job.face_sizes, plan.island,
+                                       packing.min_box_angles(offsets, points))
+            transformed = True
+    tiles = np.unique(np.vstack([p.tiles for p in plans]), axis=0)
+    try:
+        for tile in tiles:
+            _pack_tile(context, core, jobs, plans, in_mode, active, settings, tile, keep_density,
+                       phases)
+    finally:
+        _restore_selection_and_pins(jobs)
+    for plan in plans:
+        mesh_io.write_uv(plan.job.obj.data, plan.job.uv_name, plan.uv)
+    _PACK_REPORT.coverage = _coverage(plans, tiles)
+    return False
+
+
+def _coverage(plans, tiles):
+    """UV area over the area of the squares bounding the packed UVs, one square per UDIM tile
+    packed into: the new islands and, packed around, that tile's locked islands."""
+    area = 0.0
+    squares = 0.0
+    for tile in tiles:
+        lo, hi = np.full(2, np.inf), np.full(2, -np.inf)
+        for plan in plans:
+            faces = ((plan.faces & np.all(plan.tiles[np.maximum(plan.island, 0)] == tile, axis=1))
+                     | (plan.locked & np.all(plan.face_tile == tile, axis=1)))
+            if not faces.any():
+                continue
+            _, area_uv = packing.face_areas(plan.job.positions, plan.job.corner_verts,
+                                            plan.job.face_sizes, plan.job.triangles, plan.uv)
+            area += float(area_uv[faces].sum())
+            pts = plan.uv[np.repeat(faces, plan.job.face_sizes)]
+            lo, hi = np.minimum(lo, pts.min(axis=0)), np.maximum(hi, pts.max(axis=0))
+        if np.all(hi >= lo):
+            squares += float(np.max(hi - lo)) ** 2
+    return area / squares if squares > 0 else None
+
+
+class _PackReport:
+    """What the packing of the current run did (the summary reports it)."""
+
+    def __init__(self):
+        self.shapes: list[str] = []   # island shapes Blender's packer was given
+        self.coverage = None          # see _coverage
+
+
+_PACK_REPORT = _PackReport()
+
+
+def _note_shape(shape):
+    if shape not in _PACK_REPORT.shapes:
+        _PACK_REPORT.shapes.append(shape)
+
+
+def _run_packer(context, settings, shape, rotate, scale, locked, phases):
+    """Blender's packer on the selected faces of the meshes in edit mode (by mesh selection)."""
     tool_settings = context.scene.tool_settings
     sync = tool_settings.use_uv_select_sync
-    select_mode = tuple(tool_settings.mesh_select_mode)
-    for job, faces, locked in change:
-        mesh = job.obj.data
-        job.selection = mesh_io.save_selection(mesh)
-        mesh_io.select_faces(mesh, faces | locked)
-        if locked.any():
-            job.pin_state = (mesh_io.save_pins(mesh, job.uv_name),)
-            pins = mesh_io.read_pins(mesh, job.uv_name) | np.repeat(locked, job.face_sizes)
-            mesh_io.write_pins(mesh, job.uv_name, pins)
-    if change:
-        # face select mode, so entering edit mode cannot grow the selection onto faces whose
-        # vertices are all selected
-        tool_settings.mesh_select_mode = (False, False, True)
     try:
-        _enter_edit_mode(context.view_layer, in_mode, active)
         tool_settings.use_uv_select_sync = True  # pack by mesh face selection
         t0 = time.perf_counter()
         result = bpy.ops.uv.pack_islands(
             margin=settings.margin, margin_method=settings.margin_method,
-            shape_method=settings.shape_method, rotate=settings.rotate,
-            pin=around, pin_method="LOCKED")
+            shape_method=shape, rotate=rotate, rotate_method=settings.rotate_method, scale=scale,
+            pin=locked, pin_method="LOCKED")
         if phases is not None:
-            phases["pack"] = phases.get("pack", 0.0) + time.perf_counter() - t0
+            _lap(phases, "pack", t0)
     finally:
         tool_settings.use_uv_select_sync = sync
-        if change:
-            tool_settings.mesh_select_mode = select_mode
     if "FINISHED" not in result:
         raise UnwrapError(f"Blender's island packing returned {set(result)}")
-    if not change:
-        return True
-    _leave_edit_mode(in_mode)
-    _restore_selection_and_pins(job for job, _, _ in change)
-    return False
 
 
-def _pack_by_proxy(context, pack_sets, settings, phases) -> bool:
-    """Pack on a stand-in mesh of one face per island when that packs exactly as the meshes
-    themselves would (``proxy_pack``); the new UVs are written in object mode. Returns False,
-    having changed nothing, when it does not apply."""
+def _pack_tile(context, core, jobs, plans, in_mode, active, settings, tile, keep_density,
+               phases):
+    """Pack the new islands of UDIM ``tile`` (of every plan) into it, around that tile's
+    locked faces; updates each plan's ``uv``. Runs from object mode and returns to it."""
+    tile = np.asarray(tile, dtype=np.int64)
+    members = []  # (plan, new faces, locked faces) of this tile
+    for plan in plans:
+        new = plan.faces & np.all(plan.tiles[np.maximum(plan.island, 0)] == tile, axis=1)
+        if new.any():
+            members.append((plan, new, plan.locked & np.all(plan.face_tile == tile, axis=1)))
+    if not members:
+        return
+    counts = [_island_counts(plan, new) for plan, new, _ in members]
+    n_islands = sum(c[0] for c in counts)
+    n_locked = sum(int(locked.sum()) for _, _, locked in members)
+    shape = pack_shape(settings.shape_method, n_islands, sum(c[1] for c in counts))
+    _note_shape(shape)
+    rotate = settings.rotate and not any(plan.keep_angle for plan, _, _ in members)
+    group_settings = dataclasses.replace(settings, shape_method=shape, rotate=rotate)
+    offset = tile.astype(np.float64)
+    if n_locked == 0 and not keep_density and _pack_tile_by_proxy(
+            context, core, jobs, members, group_settings, n_islands, offset, phases):
+        return
+    in_tile = {id(plan.job): (plan, new, locked) for plan, new, locked in members}
+    tool_settings = context.scene.tool_settings
+    select_mode = tuple(tool_settings.mesh_select_mode)
+    # every mesh selects exactly this tile's new and locked faces (the others nothing): the
+    # packer packs the selection
+    for job in jobs:
+        plan, new, locked = in_tile.get(id(job), (None, None, None))
+        if plan is None and not job.raw_selected.any() and job.selection is None:
+            continue
+        mesh = job.obj.data
+        if job.selection is None:
+            job.selection = mesh_io.save_selection(mesh)
+        if plan is None:
+            mesh_io.select_faces(mesh, np.zeros(len(job.face_sizes), dtype=bool))
+            continue
+        mesh_io.select_faces(mesh, new | locked)
+        uv = plan.uv.copy()
+        new_corners = np.repeat(new, job.face_sizes)
+        locked_corners = np.repeat(locked, job.face_sizes)
+        # into the 0-1 tile for the packer: the locked faces by the tile's offset, the new
+        # islands together onto its centre (the packer then places them)
+        uv[locked_corners] -= offset
+        pts = uv[new_corners]
+        uv[new_corners] += 0.5 - 0.5 * (pts.min(axis=0) + pts.max(axis=0))
+        mesh_io.write_uv(mesh, job.uv_name, uv)
+        if locked.any():
+            if job.pin_state is None:
+                job.pin_state = (mesh_io.save_pins(mesh, job.uv_name),)
+            mesh_io.write_pins(mesh, job.uv_name,
+                               mesh_io.read_pins(mesh, job.uv_name) | locked_corners)
+    # face select mode, so entering edit mode cannot grow the selection onto faces whose
+    # vertices are all selected
+    tool_settings.mesh_select_mode = (False, False, True)
+    try:
+        _enter_edit_mode(context.view_layer, in_mode, active)
+        try:
+            _run_packer(context, group_settings, shape, rotate, not keep_density, n_locked > 0,
+                        phases)
+        finally:
+            _leave_edit_mode(in_mode)
+    finally:
+        tool_settings.mesh_select_mode = select_mode
+    for plan, new, _ in members:
+        job = plan.job
+        packed = mesh_io.read_uv(job.obj.data, job.uv_name).astype(np.float64)
+        corners = np.repeat(new, job.face_sizes)
+        plan.uv[corners] = packed[corners] + offset
+        # every other face (the locked ones were only moved for the packer) as before
+        mesh_io.write_uv(job.obj.data, job.uv_name, plan.uv)
+
+
+def _pack_tile_by_proxy(context, core, jobs, members, settings, n_islands, offset, phases):
+    """Pack a tile's new islands on a stand-in mesh of one face per island when that packs
+    exactly as the meshes themselves would (``proxy_pack``: nothing packed around, square
+    texture, large meshes); updates the plans' ``uv``. Returns False, having changed nothing,
+    when it does not apply."""
     t0 = time.perf_counter()
-    chosen = [(job, faces) for job, faces, _ in pack_sets if faces.any()]
-    n_islands = sum(len(np.unique(np.asarray(job.result.chart)[faces])) for job, faces in chosen)
-    locked = any(locked.any() for _, _, locked in pack_sets)
-    aspects = [aspect.image_aspect(context, job.obj) for job, _ in chosen]
-    n_faces = sum(len(job.face_sizes) for job, _, _ in pack_sets)
-    if not proxy_pack.applicable(settings, n_islands, locked, aspects, n_faces):
+    n_faces = sum(len(job.face_sizes) for job in jobs)
+    aspects = [aspect.image_aspect(context, plan.job.obj) for plan, _, _ in members]
+    if not proxy_pack.applicable(settings, n_islands, False, aspects, n_faces):
         return False
-    uvs = {id(job): mesh_io.read_uv(job.obj.data, job.uv_name) for job, _ in chosen}
-    islands = proxy_pack.islands(import_core(), chosen, uvs)
+    uvs = {id(plan.job): plan.uv for plan, _, _ in members}
+    islands = proxy_pack.islands(core, [(plan.job, new) for plan, new, _ in members], uvs)
     if islands is None:
         return False
     transforms = proxy_pack.pack(context, islands, settings, _enter_edit_mode, _leave_edit_mode)
     proxy_pack.apply(islands, transforms, uvs)
-    for job, _ in chosen:
-        mesh_io.write_uv(job.obj.data, job.uv_name, uvs[id(job)])
+    for plan, new, _ in members:
+        plan.uv[np.repeat(new, plan.job.face_sizes)] += offset
     if phases is not None:
         _lap(phases, "pack", t0)
     return True
@@ -642,6 +899,9 @@ def _write_and_pack(context, run: Run) -> Summary:
     """Steps 3 to 5 of the module docstring, from object mode; restores everything on error."""
     jobs, pack, summary = run.jobs, run.pack, run.summary
     phases = summary.phases
+    global _PACK_REPORT
+    _PACK_REPORT = _PackReport()
+    summary.pack_shape = pack.shape_method
     packing = pack.mode != "OFF"
     in_edit = False
     try:
@@ -663,8 +923,7 @@ def _write_and_pack(context, run: Run) -> Summary:
             # that they land inside the 0-1 tile without overlapping each other.
             only = None if packing else [job for job in jobs if not job.fitted]
             if only is None or only:
-                settings = pack if packing else PackSettings(
-                    "AROUND", pack.margin, pack.margin_method, pack.shape_method, pack.rotate)
+                settings = pack if packing else dataclasses.replace(pack, mode="AROUND")
                 t0, packer = time.perf_counter(), phases.get("pack", 0.0)
                 in_edit = _pack(context, jobs, run.in_mode, run.active, settings, only, phases)
                 # the packer itself is "pack"; the selection and mode changes around it "mode"
@@ -685,6 +944,7 @@ def _write_and_pack(context, run: Run) -> Summary:
         summary.results[job.obj.name] = job.result
         summary.faces += int((np.asarray(job.result.face_solved, dtype=bool) & job.selected).sum())
         summary.non_manifold_edges += int(getattr(job.result, "non_manifold_edges", 0))
+        summary.flipped_faces += job.flipped_faces
         for chart in job.result.charts:
             summary.cones += getattr(chart, "cones", 0)
             problem = ChartProblem(job.obj.name, chart.id, chart.kind, chart.status,
@@ -696,6 +956,8 @@ def _write_and_pack(context, run: Run) -> Summary:
                 if chart.status == "fallback":
                     summary.fallback.append(problem)
     summary.objects = len(jobs)
+    summary.pack_shapes = tuple(_PACK_REPORT.shapes)
+    summary.coverage = _PACK_REPORT.coverage
     summary.seconds = time.perf_counter() - run.start
     phases.pop("other", None)
     phases["other"] = max(0.0, summary.seconds - sum(phases.values()))
@@ -718,10 +980,30 @@ _SECONDS_PER_FACE = {"tutte": 2e-6, "harmonic": 2e-6, "mean_value": 3e-6, "lscm"
                      "scaffold": 2e-4}
 # Above this estimate the operator solves on a worker thread and shows progress.
 MODAL_AFTER_SECONDS = 0.5
+# Seconds Blender's packer may take on a few islands of the exact or convex shape (searched
+# island against island, see pack_shape); bounding boxes take a millisecond.
+_PACK_SHAPE_SECONDS = {"CONCAVE": 0.6, "CONVEX": 0.6, "AABB": 0.0}
+# Seconds per face of the meshes for packing's edit mode round trips and selection changes.
+_PACK_SECONDS_PER_FACE = 2e-6
 
 
-def estimated_seconds(method, faces) -> float:
-    return faces * _SECONDS_PER_FACE.get(method, 5e-5)
+def face_count(context) -> int:
+    """Faces of the meshes in edit mode."""
+    return sum(len(obj.data.polygons) for obj in context.objects_in_mode_unique_data
+               if obj.type == "MESH")
+
+
+def estimated_seconds(method, faces, pack=None, mesh_faces=0) -> float:
+    """What an unwrap of ``faces`` selected faces (of meshes of ``mesh_faces`` faces) with
+    ``method`` may take, packing included (``pack``: ``methods.pack_settings`` keywords or a
+    :class:`PackSettings`; ``None`` for no packing). Only to choose the modal path."""
+    seconds = faces * _SECONDS_PER_FACE.get(method, 5e-5)
+    if pack is not None:
+        mode = pack["mode"] if isinstance(pack, dict) else pack.mode
+        shape = pack["shape_method"] if isinstance(pack, dict) else pack.shape_method
+        if mode != "OFF":
+            seconds += _PACK_SHAPE_SECONDS.get(shape, 0.6) + _PACK_SECONDS_PER_FACE * mesh_faces
+    return seconds
 
 
 def unwrap_edit_objects(context, method, options, *, pack: PackSettings | None = None,

@@ -151,24 +151,99 @@ OPTIONS: dict[str, OptionInfo] = {
 }
 
 
+@dataclass(frozen=True)
+class PresetInfo:
+    id: str
+    label: str
+    method: str | None   # None: the method chosen under Advanced
+    description: str
+
+
+# The choices most artists need, each naming its trade-off; every method stays under Advanced.
+PRESETS: tuple[PresetInfo, ...] = (
+    PresetInfo("FAST", "Fast", "lscm",
+               "LSCM: one linear solve, the quickest. Keeps angles, but texel density can vary "
+               "a lot across an island and quads may fold"),
+    PresetInfo("BALANCED", "Balanced", "abf",
+               "ABF++: solves the angles first, then lays the island out. The best overall "
+               "atlas on closed, open and seamed meshes, a few times slower than Fast"),
+    PresetInfo("LEAST_STRETCH", "Least Stretch", "slim",
+               "SLIM: the most even texel density and never a flipped triangle, at the "
+               "cost of the longest solve"),
+    PresetInfo("ADVANCED", "Advanced", None,
+               "Choose any of the ten methods and its options"),
+)
+PRESET_BY_ID = {p.id: p for p in PRESETS}
+DEFAULT_PRESET = "BALANCED"
+DEFAULT_METHOD = PRESET_BY_ID[DEFAULT_PRESET].method
+
+
+def _preset_changed(self, _context):
+    """A preset sets its method (Advanced keeps the method as it is)."""
+    method = PRESET_BY_ID[self.preset].method
+    if method is not None and self.method != method:
+        self.method = method
+
+
+def _method_changed(self, _context):
+    """A method other than the preset's turns the preset to Advanced."""
+    method = PRESET_BY_ID[self.preset].method
+    if method is not None and self.method != method:
+        self.preset = "ADVANCED"
+
+
+def chosen_method(props) -> str:
+    """The method ``props`` (operator or scene defaults) asks for: the preset's, or under
+    Advanced the chosen method. A caller that named a method but no preset (a script's
+    ``bpy.ops.uv.uvflat_unwrap(method="tutte")``, a keymap item) gets that method."""
+    preset = PRESET_BY_ID.get(getattr(props, "preset", "ADVANCED"), PRESET_BY_ID["ADVANCED"])
+    if preset.method is None:
+        return props.method
+    # an operator answers through its properties
+    is_set = getattr(getattr(props, "properties", props), "is_property_set", None)
+    if is_set is not None and is_set("method") and not is_set("preset"):
+        return props.method
+    return preset.method
+
+
+def settle_preset(props) -> None:
+    """Make ``props``' preset and method agree with :func:`chosen_method` (what the redo panel
+    then shows): a named method without a preset is Advanced; a preset sets its method."""
+    method = chosen_method(props)
+    if PRESET_BY_ID[props.preset].method not in (None, method):
+        props.preset = "ADVANCED"
+    if props.method != method:
+        props.method = method
+
+
 def common_properties() -> dict[str, Any]:
     """Fresh bpy properties shared by the operator and the scene defaults."""
     props: dict[str, Any] = {
+        "preset": EnumProperty(
+            name="Preset",
+            description="Speed against quality of the unwrap",
+            items=tuple((p.id, p.label, p.description) for p in PRESETS),
+            default=DEFAULT_PRESET,
+            update=_preset_changed,
+        ),
         "method": EnumProperty(
             name="Method",
-            description="Parameterization method",
+            description="Parameterization method (Advanced preset)",
             items=tuple((m.id, m.label, m.description) for m in METHODS),
-            default="lscm",
+            default=DEFAULT_METHOD,
+            update=_method_changed,
         ),
         "pack": EnumProperty(
             name="Pack",
             description="Packing of the new islands with Blender's packer",
-            items=(("AROUND", "Around Others", "Pack the new islands into the free space of the "
-                                               "0-1 tile; every other island stays exactly where "
-                                               "it is"),
-                   ("ALL", "Whole Tile", "Pack the new islands over the whole 0-1 tile, as "
-                                         "Blender's Unwrap does; other islands are not moved "
-                                         "but may be overlapped"),
+            items=(("AROUND", "Around Others", "Pack the new islands into the free space of "
+                                               "the UDIM tile their faces were in, at the texel "
+                                               "density of the islands already there; every "
+                                               "other island stays exactly where it is"),
+                   ("ALL", "Whole Tile", "Pack the new islands over the whole UDIM tile their "
+                                         "faces were in, scaled to fill it, as Blender's "
+                                         "Unwrap does; other islands are not moved but may "
+                                         "be overlapped"),
                    ("OFF", "Off", "Fit each new island to where its faces' previous UVs were "
                                   "(islands without previous UVs are packed around the others)")),
             default="AROUND",
@@ -180,6 +255,12 @@ def common_properties() -> dict[str, Any]:
                         "Unwrap does",
             default=True,
         ),
+        "orient": BoolProperty(
+            name="Orient",
+            description="Turn each new island to its smallest bounding box before packing; "
+                        "with Rotate, the packer then turns islands by quarter turns only",
+            default=True,
+        ),
         # Blender's own defaults of uv.pack_islands for the three below
         "rotate": BoolProperty(
             name="Rotate",
@@ -188,10 +269,12 @@ def common_properties() -> dict[str, Any]:
         ),
         "shape_method": EnumProperty(
             name="Shape",
-            description="Island shape used by Blender's packer",
-            items=(("CONCAVE", "Exact Shape (Concave)", "Tightest, slowest"),
+            description="Island shape used by Blender's packer. The exact and convex shapes "
+                        "are searched island against island: beyond a few islands the packer "
+                        "is given convex hulls, then bounding boxes, so that it stays quick",
+            items=(("CONCAVE", "Exact Shape (Concave)", "Tightest, slowest; for a few islands"),
                    ("CONVEX", "Convex Hull", "Tighter than bounding boxes"),
-                   ("AABB", "Bounding Box", "Fastest")),
+                   ("AABB", "Bounding Box", "Fastest, whatever the number of islands")),
             default="CONCAVE",
         ),
         "margin_method": EnumProperty(
@@ -275,13 +358,15 @@ def auto_seam_options(props) -> dict[str, Any]:
 
 
 SETTING_NAMES: tuple[str, ...] = tuple(common_properties().keys())
-PACK_SETTING_NAMES: tuple[str, ...] = ("pack", "shape_method", "margin_method", "margin", "rotate")
+PACK_SETTING_NAMES: tuple[str, ...] = ("pack", "shape_method", "margin_method", "margin", "rotate",
+                                       "orient")
 
 
 def pack_settings(props) -> dict[str, Any]:
     """Keyword arguments of ``engine.PackSettings`` from ``props`` (operator or defaults)."""
     return {"mode": props.pack, "margin": props.margin, "margin_method": props.margin_method,
-            "shape_method": props.shape_method, "rotate": props.rotate}
+            "shape_method": props.shape_method, "rotate": props.rotate,
+            "orient": getattr(props, "orient", True)}
 
 
 def add_properties(cls):
@@ -292,9 +377,10 @@ def add_properties(cls):
     return cls
 
 
-def core_options(props) -> dict[str, Any]:
-    """The keyword options of ``uvflat.unwrap`` for the method chosen in ``props``."""
-    info = METHOD_BY_ID[props.method]
+def core_options(props, method=None) -> dict[str, Any]:
+    """The keyword options of ``uvflat.unwrap`` for ``method`` (default: the one ``props``
+    asks for, :func:`chosen_method`), with their values from ``props``."""
+    info = METHOD_BY_ID[method or chosen_method(props)]
     return {OPTIONS[key].keyword: OPTIONS[key].to_core(getattr(props, key)) for key in info.options}
 
 
@@ -302,9 +388,11 @@ def draw_settings(layout, props) -> None:
     """Draw the method and only that method's options (redo panel and sidebar)."""
     layout.use_property_split = True
     layout.use_property_decorate = False
-    layout.prop(props, "method")
-    for key in METHOD_BY_ID[props.method].options:
-        layout.prop(props, key)
+    layout.prop(props, "preset")
+    if PRESET_BY_ID[props.preset].method is None:  # Advanced: every method and its options
+        layout.prop(props, "method")
+        for key in METHOD_BY_ID[props.method].options:
+            layout.prop(props, key)
     layout.prop(props, "auto_seams")
     col = layout.column()
     col.active = props.auto_seams
@@ -334,8 +422,15 @@ def apply_defaults(props, defaults) -> list[str]:
     ``layout.operator(...).method = "abf"`` keeps what it asked for. Returns the names copied.
     """
     copied = []
+    method_set, preset_set = props.is_property_set("method"), props.is_property_set("preset")
     for name in SETTING_NAMES:
         if props.is_property_set(name):
+            continue
+        if name == "preset" and method_set:  # a named method runs as it is: Advanced
+            props.preset = "ADVANCED"
+            continue
+        if name == "method" and preset_set and PRESET_BY_ID[props.preset].method is not None:
+            props.method = PRESET_BY_ID[props.preset].method
             continue
         setattr(props, name, getattr(defaults, name))
         copied.append(name)

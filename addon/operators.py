@@ -23,6 +23,10 @@ _PASS_THROUGH = {"MIDDLEMOUSE", "WHEELUPMOUSE", "WHEELDOWNMOUSE", "MOUSEMOVE",
                  "INBETWEEN_MOUSEMOVE", "TRACKPADPAN", "TRACKPADZOOM", "NDOF_MOTION"}
 
 
+# Why the operators are greyed out (tooltip) or refused (scripts) outside mesh edit mode.
+POLL_MESSAGE = "uvflat: enter Edit Mode and select faces"
+
+
 def _report_summary(op, summary):
     engine.LAST_SUMMARY = summary
     op.report({"WARNING"} if summary.needs_attention else {"INFO"}, summary.line())
@@ -38,24 +42,31 @@ class UV_OT_uvflat_unwrap(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        return context.mode == "EDIT_MESH"
+        if context.mode == "EDIT_MESH":
+            return True
+        cls.poll_message_set(POLL_MESSAGE)
+        return False
 
     def invoke(self, context, event):
         defaults = getattr(context.scene, "uvflat", None)
         if defaults is not None:
             methods.apply_defaults(self.properties, defaults)
         if getattr(context, "window", None) is None or engine.estimated_seconds(
-                self.properties.method, engine.selected_face_count(context)) < engine.MODAL_AFTER_SECONDS:
+                methods.chosen_method(self.properties), engine.selected_face_count(context),
+                methods.pack_settings(self.properties),
+                engine.face_count(context)) < engine.MODAL_AFTER_SECONDS:
             return self.execute(context)
         return self.start_modal(context)
 
     def execute(self, context):
         engine.LAST_SUMMARY = None
+        methods.settle_preset(self)
+        method = methods.chosen_method(self)
         try:
             summary = engine.unwrap_edit_objects(
                 context,
-                self.method,
-                methods.core_options(self),
+                method,
+                methods.core_options(self, method),
                 auto_seams=methods.auto_seam_options(self),
                 mark_seams=self.mark_seams,
                 avoid_group=self.avoid_group,
@@ -75,7 +86,9 @@ class UV_OT_uvflat_unwrap(bpy.types.Operator):
 
     def start_modal(self, context):
         engine.LAST_SUMMARY = None
-        run = engine.Run(self.method, methods.core_options(self),
+        methods.settle_preset(self)
+        method = methods.chosen_method(self)
+        run = engine.Run(method, methods.core_options(self, method),
                          engine.PackSettings(**methods.pack_settings(self)), self.correct_aspect,
                          auto_seams=methods.auto_seam_options(self), mark_seams=self.mark_seams,
                          avoid_group=self.avoid_group)
@@ -149,7 +162,10 @@ class UV_OT_uvflat_select_flipped(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        return context.mode == "EDIT_MESH"
+        if context.mode == "EDIT_MESH":
+            return True
+        cls.poll_message_set(POLL_MESSAGE)
+        return False
 
     def execute(self, context):
         in_mode = [o for o in context.objects_in_mode if o.type == "MESH"]

@@ -6,8 +6,8 @@ single island of 840k triangles, whatever its settings), and it needs the mesh i
 which is another BMesh build of the whole mesh. Its result is one similarity per island
 (uniform scale, rotation, translation), chosen from each island's shape only:
 
-* ``AABB``: the island's bounding box, or with rotation the smallest box of any angle, which
-  is the smallest box of its convex hull;
+* ``AABB``: the island's bounding box, or with rotation the smallest box of any angle (or of
+  quarter turns), which is the smallest box of its convex hull;
 * ``CONVEX``: its convex hull;
 * ``CONCAVE`` (exact shape): for a single island with nothing to pack around there is no
   other shape to fit against, and the result is the one of its convex hull.
@@ -129,7 +129,8 @@ def pack(context, islands_, settings, enter_edit_mode, leave_edit_mode):
                 tool_settings.use_uv_select_sync = True
                 result = bpy.ops.uv.pack_islands(
                     margin=settings.margin, margin_method=settings.margin_method,
-                    shape_method=settings.shape_method, rotate=settings.rotate, pin=False)
+                    shape_method=settings.shape_method, rotate=settings.rotate,
+                    rotate_method=getattr(settings, "rotate_method", "ANY"), pin=False)
             finally:
                 tool_settings.use_uv_select_sync = sync
                 leave_edit_mode([obj])

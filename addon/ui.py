@@ -8,35 +8,65 @@ import bpy
 from . import distortion, engine, mesh_io, methods
 from .operators import UV_OT_uvflat_select_flipped, UV_OT_uvflat_unwrap
 
-# Viewport colour type of each 3D view before the heat map replaced it (by space pointer).
-_previous_color_type: dict[int, str] = {}
+# Viewport shading of each 3D view before the heat map replaced it (by space pointer):
+# (shading type, colour type).
+_previous_shading: dict[int, tuple[str, str]] = {}
+
+
+def attribute_color_type() -> str:
+    """The identifier of the solid-shading colour type that shows the active colour attribute
+    (labelled "Attribute"; ``VERTEX`` in Blender 4.2 to 5.0), read from Blender's own enum."""
+    items = bpy.types.View3DShading.bl_rna.properties["color_type"].enum_items
+    for item in items:
+        if item.name == "Attribute":
+            return item.identifier
+    for identifier in ("VERTEX", "ATTRIBUTE"):
+        if identifier in items.keys():
+            return identifier
+    raise RuntimeError("this Blender has no viewport colour type for attributes")
+
+
+def _screens(context):
+    """The screens whose 3D views show the heat map: the context's and every window's."""
+    window_manager = getattr(context, "window_manager", None)
+    candidates = [getattr(context, "screen", None)]
+    candidates += [w.screen for w in (window_manager.windows if window_manager else ())]
+    screens = []
+    for screen in candidates:
+        if screen is not None and screen not in screens:
+            screens.append(screen)
+    return screens
 
 
 def show_heat_map(context, show, kind):
     """Show (or stop showing) the distortion heat map: the meshes in edit mode (or the
     selected ones) get the heat colours of ``kind`` written from their stored per-face
     measure as active colour attribute (``distortion.write_colors``; meshes in edit mode leave
-    it for the write and enter it again), and every 3D view of the screen shades solid colours
-    by attribute. Hiding it leaves the colours on the meshes (the next unwrap removes them)."""
+    it for the write and enter it again), and every 3D view of the screens (the context's and
+    the windows') shades solid with attribute colours. Hiding it puts back each view's own
+    shading and leaves the colours on the meshes (the next unwrap removes them)."""
     objects = [o for o in (getattr(context, "objects_in_mode", None) or
                            getattr(context, "selected_objects", None) or []) if o.type == "MESH"]
     if show and objects:
         _write_heat_colors(context, objects, kind)
-    screen = getattr(context, "screen", None)
-    for area in (screen.areas if screen is not None else ()):
-        if area.type != "VIEW_3D":
-            continue
-        for space in area.spaces:
-            if space.type != "VIEW_3D":
+    color_type = attribute_color_type() if show else None
+    for screen in _screens(context):
+        for area in screen.areas:
+            if area.type != "VIEW_3D":
                 continue
-            shading = space.shading
-            key = space.as_pointer()
-            if show:
-                _previous_color_type.setdefault(key, shading.color_type)
-                shading.color_type = "ATTRIBUTE"
-            elif key in _previous_color_type:
-                shading.color_type = _previous_color_type.pop(key)
-        area.tag_redraw()
+            for space in area.spaces:
+                if space.type != "VIEW_3D":
+                    continue
+                shading = space.shading
+                key = space.as_pointer()
+                if show:
+                    _previous_shading.setdefault(key, (shading.type, shading.color_type))
+                    if shading.type != "SOLID":
+                        shading.type = "SOLID"  # only solid shading colours faces by attribute
+                    shading.color_type = color_type
+                elif key in _previous_shading:
+                    shading.type, shading.color_type = _previous_shading.pop(key)
+            area.tag_redraw()
 
 
 def _write_heat_colors(context, objects, kind):
@@ -130,6 +160,10 @@ class UVFLAT_PT_result(bpy.types.Panel):
         box = layout.box()
         box.label(text=f"{summary.method}: {summary.charts} charts, {summary.faces} faces, "
                        f"{summary.seconds:.3f} s", icon="INFO")
+        if summary.coverage is not None:
+            shapes = ", ".join(engine.SHAPE_NAMES[s] for s in summary.pack_shapes)
+            box.label(text=f"Tile coverage {100 * summary.coverage:.0f}%"
+                           + (f", packed as {shapes}" if shapes else ""))
         if summary.non_manifold_edges:
             box.label(text=f"{summary.non_manifold_edges} non-manifold edges cut as seams",
                       icon="ERROR")

@@ -606,7 +606,8 @@ def test_abf_convex_boundary(ext, scene, mesh):
     """Convex outer outline: every chart solved by ABF (no LSCM fallback), no flipped face,
     no island whose outline crosses itself, on disks and disks with holes."""
     obj = suzanne() if mesh == "suzanne" else shared_mesh(mesh)
-    result, summary = unwrap(ext, [obj], method="abf", abf_boundary="convex")
+    # The method on the charts as given (automatic seams would also cut for density).
+    result, summary = unwrap(ext, [obj], method="abf", abf_boundary="convex", auto_seams=False)
     assert result == {"FINISHED"}, summary
     _abf_check(ext, obj, summary)
     import uvflat
@@ -707,7 +708,8 @@ def _compare_with_blender(ext, obj, method, blender_method, metric):
     # Both measured on the triangles Blender renders (DESIGN: n-gons by loop_triangles).
     tris = ext.mesh_io.read_loop_triangles(obj.data)
     theirs = uvflat.metrics(data.positions, data.corner_verts, data.face_sizes, data.uv, triangles=tris)
-    result, summary = unwrap(ext, [obj], method=method, margin=0.001)
+    # Same seams as Blender's: automatic seams off (they would also cut for density).
+    result, summary = unwrap(ext, [obj], method=method, margin=0.001, auto_seams=False)
     assert result == {"FINISHED"} and not summary.failed, summary.line()
     data = read(ext, obj)
     ours = uvflat.metrics(data.positions, data.corner_verts, data.face_sizes, data.uv, triangles=tris)
@@ -792,6 +794,8 @@ def _defaults_values(ext):
 def test_invoke_keeps_the_properties_the_caller_set(ext, scene):
     defaults = bpy.context.scene.uvflat
     defaults.method, defaults.margin, defaults.pack = "lscm", 0.05, "ALL"
+    # bounding boxes pack in a millisecond: the unwrap runs in one go, not modal
+    defaults.shape_method = "AABB"
     values = _defaults_values(ext)
     values.update(method="abf", margin=0.2, pack="AROUND")
     props = _Props(values, {"method", "margin"})  # e.g. layout.operator(...).method = "abf"
@@ -801,6 +805,8 @@ def test_invoke_keeps_the_properties_the_caller_set(ext, scene):
     assert executed, "invoke did not run execute"
     assert props.method == "abf" and props.margin == 0.2, "invoke overwrote what the caller set"
     assert props.pack == "ALL", "a property the caller did not set must come from the sidebar"
+    assert props.preset == "ADVANCED", "a method named by the caller runs as named"
+    defaults.shape_method = "CONCAVE"
 
 
 def test_default_keymap_entry_runs_the_method_it_names(ext, scene):
@@ -813,6 +819,8 @@ def test_default_keymap_entry_runs_the_method_it_names(ext, scene):
     # A user edits the shortcut to name a method: invoking it runs that method, whatever the
     # sidebar says.
     bpy.context.scene.uvflat.method = "lscm"
+    # bounding boxes pack in a millisecond: the unwrap runs in one go, not modal
+    bpy.context.scene.uvflat.shape_method = "AABB"
     kmi.properties.method = "tutte"
     try:
         assert kmi.properties.is_property_set("method")
@@ -832,6 +840,7 @@ def test_default_keymap_entry_runs_the_method_it_names(ext, scene):
         assert "tutte" in summary.line()
     finally:
         kmi.properties.property_unset("method")
+        bpy.context.scene.uvflat.shape_method = "CONCAVE"
 
 
 def test_keymap_unregistered_with_the_addon(ext):
@@ -929,7 +938,7 @@ def test_non_manifold_edges_are_a_warning(ext, scene):
     reports = []
     stand_in = SimpleNamespace(report=lambda kind, text: reports.append((kind, text)),
                                **_defaults_values(ext))
-    stand_in.method = "lscm"
+    stand_in.preset, stand_in.method = "ADVANCED", "lscm"
     try:
         assert ext.operators.UV_OT_uvflat_unwrap.execute(stand_in, bpy.context) == {"FINISHED"}
     finally:
@@ -937,6 +946,7 @@ def test_non_manifold_edges_are_a_warning(ext, scene):
     assert ext.engine.LAST_SUMMARY.non_manifold_edges == 1
     (kind, text), = reports
     assert kind == {"WARNING"} and "1 non-manifold edge" in text, reports
+    assert ext.engine.LAST_SUMMARY.method == "lscm"
 
 
 # ---------------------------------------------------------------------------------------------
@@ -1096,13 +1106,15 @@ def test_modal_escape_leaves_everything_byte_identical(ext, scene, monkeypatch, 
 def test_small_unwrap_or_no_window_runs_directly(ext, scene):
     obj = suzanne()
     common.edit_mode([obj])
-    op = _operator_stand_in(ext, method="tutte")
+    # not packed: Blender's packer may take longer than the solve (see test_addon_artist)
+    op = _operator_stand_in(ext, method="tutte", pack="OFF")
     ran = []
     op.execute = lambda ctx: ran.append("execute") or {"FINISHED"}
     try:
         # background mode: no window
         assert op.invoke(bpy.context, None) == {"FINISHED"}
-        # a window, but a small selection (Suzanne: 500 faces of Tutte, well under 0.5 s)
+        # a window, but a small selection (Suzanne: 500 faces of Tutte, well under 0.5 s) and
+        # no packing
         assert op.invoke(_ContextStandIn(), None) == {"FINISHED"}
     finally:
         common.object_mode()
@@ -1176,28 +1188,54 @@ def test_select_flipped_selects_exactly_the_flipped_faces(ext, scene):
 
 
 def test_heat_map_toggle_sets_and_restores_the_viewport(ext, scene):
+    """The sidebar toggle on a real screen: every 3D view of headless Blender's window shades
+    solid with attribute colours, the mesh's active colour attribute is the uvflat heat map,
+    and turning it off puts the view's own shading back."""
     obj = suzanne()
     result, _ = unwrap(ext, [obj], method="lscm")
     assert result == {"FINISHED"}
-    shading = SimpleNamespace(color_type="OBJECT")
-    space = SimpleNamespace(type="VIEW_3D", shading=shading, as_pointer=lambda: 12345)
-    area = SimpleNamespace(type="VIEW_3D", spaces=[space], tag_redraw=lambda: None)
-    ctx = SimpleNamespace(objects_in_mode=[obj], screen=SimpleNamespace(areas=[area]))
-    dist, io = ext.distortion, ext.mesh_io
-    assert obj.data.color_attributes.get(dist.COLOR["area"]) is None
-    ext.ui.show_heat_map(ctx, True, "area")
-    assert shading.color_type == "ATTRIBUTE"
-    assert obj.data.color_attributes.active_color_name == "uvflat_area_color"
-    # the colours are written from the stored per-face measure, one colour per corner
-    face_sizes = io.read_face_sizes(obj.data)
-    expected = dist._linear_heat_colors(io.read_attribute(obj.data, dist.AREA))
-    np.testing.assert_array_equal(io.read_attribute(obj.data, dist.COLOR["area"]),
-                                  np.repeat(expected, face_sizes, axis=0))
-    ext.ui.show_heat_map(ctx, True, "conformal")
-    assert obj.data.color_attributes.active_color_name == "uvflat_conformal_color"
-    assert obj.data.color_attributes.get(dist.COLOR["area"]) is None, "only the shown kind"
-    ext.ui.show_heat_map(ctx, False, "conformal")
-    assert shading.color_type == "OBJECT", "the viewport's own colour type is put back"
+    # The screen of headless Blender's window: real areas and real 3D view spaces.
+    screen = bpy.context.screen
+    assert screen is not None and bpy.data.screens.get(screen.name) == screen
+    spaces = [area.spaces.active for area in screen.areas if area.type == "VIEW_3D"]
+    assert spaces, "the layout screen has a 3D viewport"
+    # Blender's own name for the colour type that shows the active colour attribute
+    attribute = [item.identifier for item in
+                 bpy.types.View3DShading.bl_rna.properties["color_type"].enum_items
+                 if item.name == "Attribute"]
+    assert len(attribute) == 1
+    for space in spaces:
+        space.shading.type, space.shading.color_type = "MATERIAL", "OBJECT"
+    view_layer = bpy.context.view_layer
+    for o in view_layer.objects:
+        o.select_set(o == obj)
+    view_layer.objects.active = obj
+    settings = bpy.context.scene.uvflat
+    settings.distortion_kind = "area"
+    try:
+        # the sidebar's toggle: its update runs with Blender's own context
+        settings.show_distortion = True
+        for space in spaces:
+            assert space.shading.type == "SOLID"
+            assert space.shading.color_type == attribute[0]
+        colors = obj.data.color_attributes
+        assert colors.active_color_name == "uvflat_area_color"
+        assert colors.active_color.domain == "CORNER"
+        # written from the stored per-face measure, one colour per corner
+        dist, io = ext.distortion, ext.mesh_io
+        expected = dist._linear_heat_colors(io.read_attribute(obj.data, dist.AREA))
+        np.testing.assert_array_equal(io.read_attribute(obj.data, dist.COLOR["area"]),
+                                      np.repeat(expected, io.read_face_sizes(obj.data), axis=0))
+        settings.distortion_kind = "conformal"
+        assert colors.active_color_name == "uvflat_conformal_color"
+        assert colors.get("uvflat_area_color") is None, "only the shown kind"
+        assert all(space.shading.color_type == attribute[0] for space in spaces)
+    finally:
+        settings.show_distortion = False
+        settings.distortion_kind = "conformal"
+    for space in spaces:
+        assert (space.shading.type, space.shading.color_type) == ("MATERIAL", "OBJECT"), \
+            "the viewport's own shading is put back"
 
 
 def test_heat_map_on_a_mesh_in_edit_mode_keeps_it_in_edit_mode(ext, scene):
