@@ -75,6 +75,7 @@ class Summary:
     seams_added: int = 0   # edges cut by automatic seams
     cones: int = 0         # cone singularities placed by automatic seams
     seams_marked: bool = False
+    seams_only: bool = False  # Mark Seams Only: seams marked, no UVs written
     non_manifold_edges: int = 0  # edges of 3+ selected faces, treated as seams
     flipped_faces: int = 0  # faces holding the flipped triangles (what Select Flipped selects)
     pack_shapes: tuple = ()  # island shapes Blender's packer was given (see pack_shape)
@@ -101,6 +102,8 @@ class Summary:
         the sidebar's chart list when something needs attention."""
         text = (f"uvflat {self.method}: {self.charts} chart{'s' * (self.charts != 1)}, "
                 f"{self.faces} face{'s' * (self.faces != 1)} in {self.seconds:.3f} s")
+        if self.seams_only:
+            text += "; seams only: no UVs written"
         if self.seams_added:
             text += (f"; auto seams: {self.seams_added} edge{'s' * (self.seams_added != 1)} cut "
                      f"through {self.cones} cone{'s' * (self.cones != 1)}"
@@ -747,8 +750,10 @@ class Run:
     """
 
     def __init__(self, method, options, pack: PackSettings, correct_aspect=True, *,
-                 auto_seams=None, mark_seams=True, avoid_group=""):
+                 auto_seams=None, mark_seams=True, seams_only=False, avoid_group=""):
         self.method = method
+        # Mark Seams Only: mark the planned cuts, write no UVs and pack nothing
+        self.seams_only = seams_only
         self.correct_aspect = correct_aspect
         # automatic-seams keywords of uvflat.unwrap first, the method's options after
         self.options = {**(auto_seams or {}), **dict(options)}
@@ -910,18 +915,25 @@ def _write_and_pack(context, run: Run) -> Summary:
             t0, quality = time.perf_counter(), phases.get("quality", 0.0)
             color_kind = heat_map_kind(context)
             for job in jobs:
+                if run.seams_only:
+                    # Mark Seams Only: the cuts are marked, every UV map stays as it was
+                    summary.seams_added += _mark_new_seams(job)
+                    continue
                 _write(job, phases, color_kind)
                 if run.mark_seams:
                     summary.seams_added += _mark_new_seams(job)
                 else:
                     summary.seams_added += len(getattr(job.result, "new_seams", ()))
-            summary.seams_marked = bool(run.mark_seams and summary.seams_added)
+            summary.seams_marked = bool((run.mark_seams or run.seams_only) and summary.seams_added)
+            summary.seams_only = run.seams_only
             # the core's quality measure is its own phase
             _lap(phases, "write", t0 + (phases.get("quality", 0.0) - quality))
             # 4. pack the new islands only. With packing off, islands without previous UVs
             # to keep them near (all area-scaled around the origin) are packed anyway, so
             # that they land inside the 0-1 tile without overlapping each other.
             only = None if packing else [job for job in jobs if not job.fitted]
+            if run.seams_only:
+                only = []
             if only is None or only:
                 settings = pack if packing else dataclasses.replace(pack, mode="AROUND")
                 t0, packer = time.perf_counter(), phases.get("pack", 0.0)
@@ -1008,16 +1020,18 @@ def estimated_seconds(method, faces, pack=None, mesh_faces=0) -> float:
 
 def unwrap_edit_objects(context, method, options, *, pack: PackSettings | None = None,
                         correct_aspect=True, auto_seams=None, mark_seams=True,
-                        avoid_group="") -> Summary:
+                        seams_only=False, avoid_group="") -> Summary:
     """Unwrap the selected faces of every mesh object in edit mode; see the module docstring.
 
     ``pack``: how the new islands are packed (default :class:`PackSettings`: around the
     other islands). ``correct_aspect``: scale the new islands for the texture's aspect ratio
     (see ``aspect.py``). ``auto_seams``: the automatic-seams keywords of ``uvflat.unwrap``
-    (default: the core's); ``mark_seams``: mark the edges it cut as seams; ``avoid_group``:
-    a vertex group where new seams must not go."""
+    (default: the core's); ``mark_seams``: mark the edges it cut as seams; ``seams_only``:
+    mark them and nothing else (no UVs, no packing: *Mark Seams Only*); ``avoid_group``: a
+    vertex group where new seams must not go."""
     run = Run(method, options, PackSettings() if pack is None else pack, correct_aspect,
-              auto_seams=auto_seams, mark_seams=mark_seams, avoid_group=avoid_group)
+              auto_seams=auto_seams, mark_seams=mark_seams, seams_only=seams_only,
+              avoid_group=avoid_group)
     run.prepare(context, stay_out=True)
     try:
         run.solve()

@@ -341,6 +341,12 @@ def auto_seam_properties() -> dict[str, Any]:
                         "and unwrap again",
             default=True,
         ),
+        "seams_only": BoolProperty(
+            name="Mark Seams Only",
+            description="Plan the seams automatic seams would cut and mark them, without "
+                        "writing any UVs: review and edit them, then unwrap",
+            default=False,
+        ),
     }
 
 
@@ -408,6 +414,7 @@ def draw_settings(layout, props) -> None:
     else:
         col.prop(props, "avoid_group")
     col.prop(props, "mark_seams")
+    col.prop(props, "seams_only")
     layout.prop(props, "correct_aspect")
     layout.prop(props, "pack")
     col = layout.column()

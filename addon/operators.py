@@ -69,6 +69,7 @@ class UV_OT_uvflat_unwrap(bpy.types.Operator):
                 methods.core_options(self, method),
                 auto_seams=methods.auto_seam_options(self),
                 mark_seams=self.mark_seams,
+                seams_only=self.auto_seams and self.seams_only,
                 avoid_group=self.avoid_group,
                 pack=engine.PackSettings(**methods.pack_settings(self)),
                 correct_aspect=self.correct_aspect,
@@ -91,6 +92,7 @@ class UV_OT_uvflat_unwrap(bpy.types.Operator):
         run = engine.Run(method, methods.core_options(self, method),
                          engine.PackSettings(**methods.pack_settings(self)), self.correct_aspect,
                          auto_seams=methods.auto_seam_options(self), mark_seams=self.mark_seams,
+                         seams_only=self.auto_seams and self.seams_only,
                          avoid_group=self.avoid_group)
         try:
             run.prepare(context, stay_out=True)

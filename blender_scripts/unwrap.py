@@ -134,6 +134,10 @@ def parse_args(argv):
                              "seams must not go")
     parser.add_argument("--mark-seams", action=argparse.BooleanOptionalAction, default=True,
                         help="mark the cuts automatic seams made as edge seams in the output")
+    parser.add_argument("--seams-only", action="store_true",
+                        help="mark the seams automatic seams would cut and write no UVs "
+                             "(Mark Seams Only): review and edit them in the .blend, then "
+                             "unwrap; needs .blend output")
     parser.add_argument("--png", type=Path, default=None, help="UV layout image path")
     parser.add_argument("--size", type=int, default=1024, help="UV layout image size")
     parser.add_argument("--report", type=Path, default=None,
@@ -333,13 +337,23 @@ def check_args(args, methods, core_methods):
     if args.sharp_angle is not None and not (math.isfinite(args.sharp_angle)
                                              and 0.0 < args.sharp_angle < 180.0):
         raise UsageError(f"--sharp-angle {args.sharp_angle}: must be between 0 and 180 degrees")
+    if args.seams_only:
+        if not args.auto_seams:
+            raise UsageError("--seams-only plans automatic seams: it contradicts --no-auto-seams")
+        if not args.mark_seams:
+            raise UsageError("--seams-only marks seams: it contradicts --no-mark-seams")
+        target = args.format if args.batch else args.output.suffix.lower().lstrip(".")
+        if target != "blend":
+            raise UsageError(f"--seams-only writes seams, which only a .blend keeps (output "
+                             f"format {target or '(none)'}): write a .blend")
     if args.avoid_group and not args.auto_seams:
         raise UsageError(f"--avoid-group {args.avoid_group!r} steers automatic seams: it "
                          "contradicts --no-auto-seams")
     # automatic seams travel with the packing properties to the operator
     pack_props.update(auto_seams=args.auto_seams, max_stretch=args.max_stretch,
                       max_cones=args.max_cones, mark_seams=args.mark_seams,
-                      avoid_group=args.avoid_group, prefer_sharp=args.sharp_angle is not None)
+                      avoid_group=args.avoid_group, prefer_sharp=args.sharp_angle is not None,
+                      seams_only=args.seams_only)
     if args.sharp_angle is not None:
         pack_props["sharp_angle"] = math.radians(args.sharp_angle)
     return method_props, pack_props
@@ -531,20 +545,21 @@ def run_single(args, addon, method_props, pack_props) -> int:
     except (RuntimeError, OSError) as ex:
         return fail(f"output {args.output}: {ex}")
     log(f"wrote {args.output}")
-    png = args.png or args.output.with_name(args.output.stem + "_uv.png")
-    uvs, sizes = [], []
-    for obj in objects:
-        _, _, face_sizes = mesh_io.read_topology(obj.data)
-        if mesh_io.active_uv_name(obj.data) is not None:
-            uvs.append(mesh_io.read_uv(obj.data))
-            sizes.append(face_sizes)
-    try:
-        common.save_layout(png, np.concatenate(uvs) if uvs else np.zeros((0, 2)),
-                           np.concatenate(sizes) if sizes else np.zeros(0, dtype=np.int64),
-                           size=args.size, title=f"{source.name} - {args.method}")
-    except OSError as ex:
-        return fail(f"--png {png}: {ex}")
-    log(f"wrote {png}")
+    if not args.seams_only:  # Mark Seams Only writes no UVs: no layout image
+        png = args.png or args.output.with_name(args.output.stem + "_uv.png")
+        uvs, sizes = [], []
+        for obj in objects:
+            _, _, face_sizes = mesh_io.read_topology(obj.data)
+            if mesh_io.active_uv_name(obj.data) is not None:
+                uvs.append(mesh_io.read_uv(obj.data))
+                sizes.append(face_sizes)
+        try:
+            common.save_layout(png, np.concatenate(uvs) if uvs else np.zeros((0, 2)),
+                               np.concatenate(sizes) if sizes else np.zeros(0, dtype=np.int64),
+                               size=args.size, title=f"{source.name} - {args.method}")
+        except OSError as ex:
+            return fail(f"--png {png}: {ex}")
+        log(f"wrote {png}")
     status = 2 if summary.failed else 0
     if args.report is not None:
         report = {

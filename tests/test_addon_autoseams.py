@@ -109,3 +109,82 @@ def test_shared_closed_meshes_through_the_operator(ext, scene, name):
     assert not summary.failed
     after = read(ext, obj)
     assert flipped_triangles(after, np.asarray(res.chart)) == 0
+
+
+def _open_dome(name="Dome"):
+    """A UV sphere with its bottom cap deleted (below z = -0.6): an open mesh with one
+    boundary loop, too curved to flatten within Max Stretch uncut."""
+    obj = _sphere(name)
+    io = common.mesh_io()
+    me = obj.data
+    n = len(me.vertices)
+    co = np.empty(3 * n)
+    me.vertices.foreach_get("co", co)
+    z = co.reshape(-1, 3)[:, 2]
+    common.edit_mode([obj], select_all=False)
+    try:
+        import bmesh
+
+        bm = bmesh.from_edit_mesh(me)
+        bmesh.ops.delete(bm, geom=[v for v in bm.verts if z[v.index] < -0.6], context="VERTS")
+        bmesh.update_edit_mesh(me)
+    finally:
+        common.object_mode()
+    io.write_seams(me, np.zeros(len(me.edges), dtype=bool))
+    return obj
+
+
+def _islands_density_outside(data, bound):
+    """Per island (uvflat.metrics), the share of area outside [1/bound, bound] of its density."""
+    import uvflat
+
+    m = uvflat.metrics(data.positions, data.corner_verts, data.face_sizes, data.uv)
+    assert bound == 2.0  # metrics measure against [1/2, 2]
+    return m, [c["density_outside"] for c in m.per_chart]
+
+
+@pytest.mark.parametrize("shape", ["closed", "open"])
+def test_auto_seams_hold_max_stretch_on_closed_and_open_meshes(ext, scene, shape):
+    """The atlas rule through the real operator: every island within Max Stretch (at most 5%
+    of its area outside [1/2, 2] of its density), no flips, no crossing outline; the open dome
+    is cut too (flattened whole, its rim is crushed against its pole)."""
+    obj = _sphere() if shape == "closed" else _open_dome()
+    before_open = read(ext, obj)
+    result, summary = unwrap(ext, [obj], method="abf", max_stretch=2.0)
+    assert result == {"FINISHED"} and not summary.failed, summary.line()
+    after = read(ext, obj)
+    m, outside = _islands_density_outside(after, 2.0)
+    assert m.flips == 0 and m.overlapping_charts == 0, m
+    assert max(outside) <= 0.05 + 1e-9, outside
+    assert summary.seams_added > 0 and len(after.seams) > 0
+    # The same mesh uncut breaks the rule: the cuts were needed.
+    import uvflat
+
+    raw = uvflat.unwrap(before_open.positions, before_open.corner_verts, before_open.face_sizes,
+                        method="abf", auto_seams=False)
+    if shape == "open":
+        assert raw.charts[0].density_outside > 0.05, raw.charts[0]
+
+
+def test_mark_seams_only_marks_the_planned_seams_and_writes_no_uv(ext, scene):
+    import uvflat
+
+    obj = _sphere()
+    before = read(ext, obj)
+    n_maps = len(obj.data.uv_layers)
+    result, summary = unwrap(ext, [obj], method="abf", seams_only=True)
+    assert result == {"FINISHED"}, summary
+    after = read(ext, obj)
+    assert len(obj.data.uv_layers) == n_maps
+    assert np.array_equal(after.uv, before.uv), "Mark Seams Only wrote UVs"
+    # The operator passes Blender's render triangles; so does the plan.
+    tris = ext.mesh_io.read_loop_triangles(obj.data)
+    planned = uvflat.plan_seams(before.positions, before.corner_verts, before.face_sizes, method="abf",
+                                triangles=tris)
+    marked = {tuple(sorted(map(int, s))) for s in after.seams}
+    assert marked == {tuple(map(int, s)) for s in planned} and len(marked) > 0
+    assert "seams only" in summary.line()
+    # Unwrapping afterwards on those seams adds none and solves every face.
+    result, summary = unwrap(ext, [obj], method="abf")
+    assert summary.seams_added == 0
+    assert np.asarray(summary.results[obj.name].face_solved).all()

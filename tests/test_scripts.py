@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
@@ -527,3 +528,47 @@ def test_avoid_group_that_does_not_exist_is_one_line(tmp_path):
     r = _run(blend, out, "--avoid-group", "Face", "--method", "lscm")
     assert r.returncode == 0, r.stdout + r.stderr
     assert out.is_file()
+
+
+def test_seams_only_marks_seams_and_writes_no_uvs(tmp_path):
+    """--seams-only: the output .blend carries the planned seams (exactly uvflat.plan_seams of
+    the mesh) and no UV map; no layout image is written."""
+    src, out = tmp_path / "box.obj", tmp_path / "out.blend"
+    _closed_box_obj(src)
+    r = _run(src, out, "--method", "abf", "--seams-only")
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "seams only" in r.stdout
+    assert not (tmp_path / "out_uv.png").exists()
+    probe = (
+        "import bpy, json\n"
+        f"bpy.ops.wm.open_mainfile(filepath={str(out)!r})\n"
+        "o = [o for o in bpy.data.objects if o.type == 'MESH'][0]\n"
+        "me = o.data\n"
+        "print(json.dumps({'uv_maps': [l.name for l in me.uv_layers],\n"
+        "  'seams': sorted(sorted(e.vertices[:]) for e in me.edges if e.use_seam),\n"
+        "  'positions': [v.co[:] for v in me.vertices],\n"
+        "  'corner_verts': [l.vertex_index for l in me.loops],\n"
+        "  'face_sizes': [p.loop_total for p in me.polygons]}))\n"
+    )
+    p = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    data = json.loads(p.stdout.strip().splitlines()[-1])
+    uv_maps_before = 0 if "vt " not in src.read_text() else 1
+    assert len(data["uv_maps"]) <= uv_maps_before, data["uv_maps"]
+    assert len(data["seams"]) > 0
+    import uvflat
+
+    planned = uvflat.plan_seams(np.array(data["positions"]), np.array(data["corner_verts"]),
+                                np.array(data["face_sizes"]), method="abf")
+    assert {tuple(s) for s in data["seams"]} == {tuple(map(int, s)) for s in planned}
+
+
+@pytest.mark.parametrize("extra,needle", [(["--no-auto-seams"], "--no-auto-seams"),
+                                          (["--no-mark-seams"], "--no-mark-seams")])
+def test_seams_only_contradictions_are_one_line(tmp_path, extra, needle):
+    src = tmp_path / "box.obj"
+    _closed_box_obj(src)
+    r = _run(src, tmp_path / "out.blend", "--seams-only", *extra)
+    assert r.returncode == 1 and needle in r.stderr + r.stdout and "Traceback" not in r.stderr
+    r = _run(src, tmp_path / "out.obj", "--seams-only")
+    assert r.returncode == 1 and ".blend" in r.stderr + r.stdout and "Traceback" not in r.stderr
