@@ -121,24 +121,11 @@ def seam_length(positions, corner_verts, face_sizes, uv, tol=1e-7):
     return float(length / math.sqrt(area))
 
 
-def _components(n, a, b):
-    """Connected-component label of each of ``n`` nodes joined by the edges ``a``–``b``."""
-    label = np.arange(n)
-    while True:
-        new = label.copy()
-        np.minimum.at(new, a, label[b])
-        np.minimum.at(new, b, label[a])
-        new = new[new]
-        if np.array_equal(new, label):
-            return label
-        label = new
-
-
 def mesh_parts(corner_verts, face_sizes):
     """Number of separate parts (faces connected through shared vertices)."""
     corner_verts = np.asarray(corner_verts, dtype=np.int64)
     nxt, _ = _next_corner(np.asarray(face_sizes, dtype=np.int64))
-    label = _components(int(corner_verts.max()) + 1, corner_verts, corner_verts[nxt])
+    label = common.components(int(corner_verts.max()) + 1, corner_verts, corner_verts[nxt])
     return len(np.unique(label[corner_verts]))
 
 
@@ -169,7 +156,7 @@ def density_spread(positions, corner_verts, face_sizes, uv, bound=DENSITY_BOUND)
     m1 = np.where(same_dir, c2, nxt[c2])
     m2 = np.where(same_dir, nxt[c2], c2)
     agree = (uv[c1] == uv[m1]).all(axis=1) & (uv[nxt[c1]] == uv[m2]).all(axis=1)
-    island = _components(len(face_sizes), face[c1[agree]], face[c2[agree]])
+    island = common.components(len(face_sizes), face[c1[agree]], face[c2[agree]])
     tri, tri_face = _fan_corners(face_sizes)
     p = [positions[corner_verts[tri[:, j]]] for j in range(3)]
     q = [uv[tri[:, j]] for j in range(3)]
@@ -265,7 +252,7 @@ def bunny_open():
     # what is left of the base's floor apart from the body (a flat patch) goes with it
     nxt, face = _next_corner(face_sizes)
     kept = keep[face]
-    label = _components(len(positions), corner_verts[kept], corner_verts[nxt][kept])
+    label = common.components(len(positions), corner_verts[kept], corner_verts[nxt][kept])
     body = np.bincount(label[corner_verts[kept]]).argmax()
     keep &= label[corner_verts[_starts(face_sizes)]] == body
     return _keep_faces("bunny_open", positions, corner_verts, face_sizes, keep)

@@ -548,3 +548,16 @@ def grid(images, columns):
     for i, im in enumerate(images):
         out.paste(im, ((i % columns) * w, (i // columns) * h))
     return out
+
+
+def components(n, a, b):
+    """Connected-component label of each of ``n`` nodes joined by the edges ``a``–``b``."""
+    label = np.arange(n)
+    while True:
+        new = label.copy()
+        np.minimum.at(new, a, label[b])
+        np.minimum.at(new, b, label[a])
+        new = new[new]
+        if np.array_equal(new, label):
+            return label
+        label = new

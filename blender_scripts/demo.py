@@ -321,19 +321,6 @@ class Mesh:
         self.total_area = float(self.area.sum())
 
 
-def _components(n, a, b):
-    """Connected-component label of each of ``n`` nodes joined by the edges ``a``–``b``."""
-    label = np.arange(n)
-    while True:
-        new = label.copy()
-        np.minimum.at(new, a, label[b])
-        np.minimum.at(new, b, label[a])
-        new = new[new]
-        if np.array_equal(new, label):
-            return label
-        label = new
-
-
 class UvMap:
     """A per-corner UV map of a :class:`Mesh`: its islands, seams and texel density."""
 
@@ -348,7 +335,7 @@ class UvMap:
         e2 = np.where(same_dir, nxt[c2], c2)
         agree = ((np.abs(uv[c1] - uv[e1]).max(axis=1) <= tol)
                  & (np.abs(uv[nxt[c1]] - uv[e2]).max(axis=1) <= tol))
-        self.island = _components(len(m.face_sizes), m.face_of[c1[agree]], m.face_of[c2[agree]])
+        self.island = common.components(len(m.face_sizes), m.face_of[c1[agree]], m.face_of[c2[agree]])
         _, self.island = np.unique(self.island, return_inverse=True)
         self.islands = int(self.island.max()) + 1 if len(self.island) else 0
         # seams: edges of two faces whose UVs differ (vertex pairs)
