@@ -444,43 +444,6 @@ fn unwrap(
     })
 }
 
-/// The seams automatic seams would add, without writing UVs ("Mark Seams Only"): the
-/// `new_seams` of `unwrap` with the same arguments, shape (S, 2), uint32 vertex pairs.
-///
-/// See the package documentation (`uvflat.plan_seams`) for the arguments.
-#[pyfunction]
-#[pyo3(signature = (positions, corner_verts, face_sizes, *, method = None, seams = None, selected = None,
-                    pins = None, pin_uvs = None, fit_to = None, triangles = None, auto_seams = None,
-                    max_stretch = None, max_cones = None, avoid_vertices = None, sharp_angle = None,
-                    progress = None, **options))]
-#[allow(clippy::too_many_arguments)]
-fn plan_seams(
-    py: Python<'_>,
-    positions: &Bound<'_, PyAny>,
-    corner_verts: &Bound<'_, PyAny>,
-    face_sizes: &Bound<'_, PyAny>,
-    method: Option<&Bound<'_, PyAny>>,
-    seams: Option<&Bound<'_, PyAny>>,
-    selected: Option<&Bound<'_, PyAny>>,
-    pins: Option<&Bound<'_, PyAny>>,
-    pin_uvs: Option<&Bound<'_, PyAny>>,
-    fit_to: Option<&Bound<'_, PyAny>>,
-    triangles: Option<&Bound<'_, PyAny>>,
-    auto_seams: Option<&Bound<'_, PyAny>>,
-    max_stretch: Option<&Bound<'_, PyAny>>,
-    max_cones: Option<&Bound<'_, PyAny>>,
-    avoid_vertices: Option<&Bound<'_, PyAny>>,
-    sharp_angle: Option<&Bound<'_, PyAny>>,
-    progress: Option<&Bound<'_, PyAny>>,
-    options: Option<&Bound<'_, PyDict>>,
-) -> PyResult<Py<PyArray2<u32>>> {
-    let r = unwrap(
-        py, positions, corner_verts, face_sizes, method, seams, selected, pins, pin_uvs, fit_to, triangles, auto_seams,
-        max_stretch, max_cones, avoid_vertices, sharp_angle, progress, options,
-    )?;
-    Ok(r.new_seams)
-}
-
 /// Least time between two calls of a Python progress callback (the last chart always calls).
 const PROGRESS_INTERVAL: Duration = Duration::from_millis(100);
 
@@ -594,7 +557,6 @@ fn _internal_panic_check(py: Python<'_>) -> PyResult<()> {
 fn _uvflat(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
     m.add_function(wrap_pyfunction!(unwrap, m)?)?;
-    m.add_function(wrap_pyfunction!(plan_seams, m)?)?;
     m.add_function(wrap_pyfunction!(metrics, m)?)?;
     m.add_function(wrap_pyfunction!(factorization_seconds, m)?)?;
     m.add_function(wrap_pyfunction!(island_hulls, m)?)?;

@@ -40,7 +40,6 @@ from ._uvflat import (
     island_hulls,
     metrics,
 )
-from ._uvflat import plan_seams as _native_plan_seams
 from ._uvflat import unwrap as _native_unwrap
 
 __all__ = [
@@ -180,8 +179,8 @@ def plan_seams(positions, corner_verts, face_sizes, *, method="abf", seams=None,
     Raises:
         The errors of :func:`unwrap`.
     """
-    return _native_plan_seams(positions, corner_verts, face_sizes, method=method, seams=seams,
-                              selected=selected, pins=pins, pin_uvs=pin_uvs, fit_to=fit_to,
-                              triangles=triangles, auto_seams=auto_seams, max_stretch=max_stretch,
-                              max_cones=max_cones, avoid_vertices=avoid_vertices,
-                              sharp_angle=sharp_angle, progress=progress, **options)
+    return _native_unwrap(positions, corner_verts, face_sizes, method=method, seams=seams,
+                          selected=selected, pins=pins, pin_uvs=pin_uvs, fit_to=fit_to,
+                          triangles=triangles, auto_seams=auto_seams, max_stretch=max_stretch,
+                          max_cones=max_cones, avoid_vertices=avoid_vertices,
+                          sharp_angle=sharp_angle, progress=progress, **options).new_seams
