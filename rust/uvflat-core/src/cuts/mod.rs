@@ -11,7 +11,8 @@
 //!    by shortest edge paths; dangling branches pruned.
 //! 3. The caller adds the cut edges to the seams and rebuilds the chart, which is then a disk
 //!    (χ = 1, one boundary loop); [`split`] halves a chart that repair rounds could not make
-//!    valid.
+//!    valid, along the cheapest loop near the half-area level set of its Fiedler vector
+//!    ([`fiedler`], [`min_cut`]; [`planar_split`] when that fails).
 //!
 //! Edge cost of a cut ([`edge_costs`]), where an artist would put a seam:
 //! * 3D length;
@@ -30,7 +31,10 @@
 
 pub mod cones;
 pub mod cut_graph;
+pub mod fiedler;
 pub mod graph;
+pub mod min_cut;
+pub mod planar_split;
 pub mod split;
 pub mod visibility;
 
@@ -248,6 +252,11 @@ impl<'a> ChartCutter<'a> {
     /// The edge graph of the chart.
     pub fn graph(&self) -> &ChartGraph {
         &self.graph
+    }
+
+    /// Cut cost of every edge of [`Self::graph`] ([`edge_costs`]).
+    pub fn costs(&self) -> &[f64] {
+        &self.cost
     }
 
     /// Per chart vertex: whether it may become a cone (inside the chart, not avoided).
