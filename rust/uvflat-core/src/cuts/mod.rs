@@ -36,6 +36,8 @@ pub mod graph;
 pub mod min_cut;
 pub mod planar_split;
 pub mod split;
+pub mod symmetric_cut;
+pub mod symmetry;
 pub mod visibility;
 
 use crate::charts::{Chart, ChartKind};
@@ -43,6 +45,7 @@ use crate::error::{Result, UvError};
 use crate::mesh::PolyMesh;
 
 pub use graph::ChartGraph;
+pub use symmetry::Symmetry;
 
 /// Cost factor of a cut along a sharp edge (cheaper: seams hide along creases).
 pub const SHARP_FACTOR: f64 = 0.2;
@@ -91,6 +94,12 @@ pub struct AutoSeamOptions {
     /// turns the term off and skips the occlusion rays). Visibility is `1 −` ambient occlusion
     /// per vertex ([`visibility`]); must be finite and in `[0, 100]`.
     pub visibility_weight: f64,
+    /// Mirror symmetry the seams keep (default [`Symmetry::None`]). When a chart is its own
+    /// mirror image ([`symmetry`]), cut costs and cones are made symmetric (a cone's mirror is
+    /// a cone too, so a chart may get up to twice `max_cones`), and a closed genus-0 chart is
+    /// cut on one half and the cut mirrored ([`symmetric_cut`]): its seams map onto themselves.
+    /// Other charts get symmetric costs and cones only; splits are not mirrored.
+    pub symmetry: Symmetry,
 }
 
 impl Default for AutoSeamOptions {
@@ -102,6 +111,7 @@ impl Default for AutoSeamOptions {
             avoid_vertices: Vec::new(),
             sharp_angle: None,
             visibility_weight: VISIBILITY_WEIGHT,
+            symmetry: Symmetry::None,
         }
     }
 }
@@ -166,6 +176,9 @@ pub struct ChartCuts {
     pub length: f64,
     /// Largest |log scale factor| predicted with these cones.
     pub max_log_scale: f64,
+    /// Whether the cut was planned on one half of a mirror-symmetric chart and mirrored (it is
+    /// then its own mirror image).
+    pub mirrored: bool,
 }
 
 /// Per-edge cut costs of `graph` (see the module docs). Casts the occlusion rays when
@@ -231,22 +244,43 @@ pub struct ChartCutter<'a> {
     boundary: Vec<bool>,
     min_cones: usize,
     solver: Option<cones::ScaleSolver>,
+    mirror: Option<symmetry::Mirror>,
 }
 
 impl<'a> ChartCutter<'a> {
     /// Analyse `chart` (preconditions of [`cut_chart`]).
     pub fn new(mesh: &PolyMesh<'_>, chart: &'a Chart, options: &'a AutoSeamOptions, avoid: &[bool]) -> Self {
         let graph = ChartGraph::new(mesh, chart);
-        let cost = edge_costs(mesh, &graph, chart, options, avoid);
+        let mut cost = edge_costs(mesh, &graph, chart, options, avoid);
         let boundary = chart.boundary_mask();
-        let allowed: Vec<bool> =
+        let mut allowed: Vec<bool> =
             (0..chart.positions.len()).map(|v| !boundary[v] && !avoid[chart.mesh_vertex[v] as usize]).collect();
+        let mirror = symmetry::detect(&graph, &chart.positions, options.symmetry);
+        if let Some(m) = &mirror {
+            // The mean of an edge's cost and its mirror's; forbidden if either is.
+            cost = (0..cost.len())
+                .map(|e| {
+                    let (a, b) = (cost[e], cost[m.edge[e] as usize]);
+                    if a.is_finite() && b.is_finite() {
+                        0.5 * (a + b)
+                    } else {
+                        AVOID_COST
+                    }
+                })
+                .collect();
+            allowed = (0..allowed.len()).map(|v| allowed[v] && allowed[m.vertex[v] as usize]).collect();
+        }
         let min_cones = match (chart.boundary_loops.is_empty(), chart.genus) {
             (true, 0) => 2,
             (true, _) => 1,
             (false, _) => 0,
         };
-        ChartCutter { chart, options, graph, cost, allowed, boundary, min_cones, solver: cones::ScaleSolver::new(chart) }
+        ChartCutter { chart, options, graph, cost, allowed, boundary, min_cones, solver: cones::ScaleSolver::new(chart), mirror }
+    }
+
+    /// The chart's mirror, when [`AutoSeamOptions::symmetry`] asked for one and found it.
+    pub fn mirror(&self) -> Option<&symmetry::Mirror> {
+        self.mirror.as_ref()
     }
 
     /// The edge graph of the chart.
@@ -268,16 +302,20 @@ impl<'a> ChartCutter<'a> {
     pub fn cut(&self, seed_cones: &[u32], extra_cones: usize) -> ChartCuts {
         let (chart, options, graph, cost, boundary, min_cones) =
             (self.chart, self.options, &self.graph, &self.cost, &self.boundary, self.min_cones);
-        let cones = match &self.solver {
+        let seeds = match &self.mirror {
+            Some(m) => mirrored(seed_cones, m),
+            None => seed_cones.to_vec(),
+        };
+        let mut cones = match &self.solver {
             Some(solver) => cones::place_cones(
                 solver,
                 &self.allowed,
                 min_cones,
                 options.max_cones + extra_cones,
                 options.max_stretch.ln(),
-                seed_cones,
+                &seeds,
             ),
-            None => cones::Cones { vertices: seed_cones.to_vec(), curvature: vec![0.0; seed_cones.len()], u: vec![], max_u: f64::INFINITY },
+            None => cones::Cones { vertices: seeds.clone(), curvature: vec![0.0; seeds.len()], u: vec![], max_u: f64::INFINITY },
         };
         let mut cone_vertices = cones.vertices.clone();
         if cone_vertices.len() < min_cones {
@@ -291,17 +329,39 @@ impl<'a> ChartCutter<'a> {
                 }
             }
         }
-        let loops = if chart.genus > 0 {
-            let root = cone_vertices.first().copied().or_else(|| chart.boundary_loops.first().map(|l| l[0])).unwrap_or(0);
-            cut_graph::handle_loops(graph, cost, root, &chart.boundary_loops)
-        } else {
-            vec![false; graph.edges.len()]
+        if let Some(m) = &self.mirror {
+            // Add the cones' mirrors; solve again with the symmetric set held (its curvature),
+            // which may place a cone more when the set is still short of `min_cones`.
+            for _ in 0..3 {
+                let sym = mirrored(&cone_vertices, m);
+                let Some(solver) = &self.solver else {
+                    cone_vertices = sym;
+                    break;
+                };
+                let again = cones::place_cones(solver, &self.allowed, min_cones, sym.len(), options.max_stretch.ln(), &sym);
+                let done = again.vertices == sym;
+                cone_vertices = again.vertices.clone();
+                cones = again;
+                if done {
+                    break;
+                }
+            }
+            cone_vertices = mirrored(&cone_vertices, m);
+        }
+        let planned = match &self.mirror {
+            Some(m) if chart.boundary_loops.is_empty() && chart.genus == 0 => {
+                symmetric_cut::symmetric_cut(graph, cost, &chart.positions, m, &cone_vertices)
+            }
+            _ => None,
         };
-        let cut = cut_graph::join_and_prune(graph, cost, loops, &cone_vertices, &chart.boundary_loops);
+        let mirrored_cut = planned.is_some();
+        let cut = planned.unwrap_or_else(|| self.plain_cut(&cone_vertices));
         let mut out = ChartCuts {
             cones: cone_vertices.clone(),
-            cone_curvature: cones.curvature.clone(),
+            // Cones added after the solve (none placed, or mirrors) carry no predicted curvature.
+            cone_curvature: if self.mirror.is_none() || cones.vertices == cone_vertices { cones.curvature.clone() } else { Vec::new() },
             max_log_scale: cones.max_u,
+            mirrored: mirrored_cut,
             ..Default::default()
         };
         out.cone_curvature.resize(cone_vertices.len(), 0.0);
@@ -316,4 +376,29 @@ impl<'a> ChartCutter<'a> {
         }
         out
     }
+
+    /// Handle loops (genus > 0) joined to the cones and boundary loops (see [`cut_graph`]).
+    fn plain_cut(&self, cone_vertices: &[u32]) -> Vec<bool> {
+        let (chart, graph, cost) = (self.chart, &self.graph, &self.cost);
+        let loops = if chart.genus > 0 {
+            let root = cone_vertices.first().copied().or_else(|| chart.boundary_loops.first().map(|l| l[0])).unwrap_or(0);
+            cut_graph::handle_loops(graph, cost, root, &chart.boundary_loops)
+        } else {
+            vec![false; graph.edges.len()]
+        };
+        cut_graph::join_and_prune(graph, cost, loops, cone_vertices, &chart.boundary_loops)
+    }
+}
+
+/// `cones` and their mirror images, in order (each new mirror after its cone), without repeats.
+fn mirrored(cones: &[u32], mirror: &symmetry::Mirror) -> Vec<u32> {
+    let mut out: Vec<u32> = Vec::with_capacity(2 * cones.len());
+    for &c in cones {
+        for v in [c, mirror.vertex[c as usize]] {
+            if !out.contains(&v) {
+                out.push(v);
+            }
+        }
+    }
+    out
 }
