@@ -25,6 +25,9 @@ pub struct ChartGraph {
     pub length: Vec<f64>,
     /// Angle between the normals of the two polygons beside each edge (0 for flat or boundary).
     pub dihedral: Vec<f64>,
+    /// Whether the surface folds inward across each edge (a valley seen from the side the
+    /// polygons' winding faces; `false` for convex, flat and boundary edges).
+    pub concave: Vec<bool>,
     /// CSR adjacency: the neighbours of vertex `v` are `adj[adj_start[v]..adj_start[v + 1]]`
     /// as `(neighbour, edge id)`, in ascending neighbour order (deterministic walks).
     pub adj_start: Vec<usize>,
@@ -101,6 +104,31 @@ impl ChartGraph {
                 c.atan2(dot(a, b)).abs()
             })
             .collect();
+        // Convex when the normals diverge: (n₀ − n₁)·(c₀ − c₁) > 0 for the polygons' normals
+        // and centroids (a ridge's normals lean away from each other).
+        let centroids: Vec<[f64; 3]> = polygons
+            .iter()
+            .map(|poly| {
+                let mut c = [0.0; 3];
+                for &v in poly {
+                    let p = chart.positions[v as usize];
+                    for k in 0..3 {
+                        c[k] += p[k] / poly.len() as f64;
+                    }
+                }
+                c
+            })
+            .collect();
+        let concave: Vec<bool> = edge_polygons
+            .iter()
+            .map(|p| {
+                if p[1] == u32::MAX || p[0] == p[1] {
+                    return false;
+                }
+                let (a, b) = (p[0] as usize, p[1] as usize);
+                dot(sub(normals[a], normals[b]), sub(centroids[a], centroids[b])) < 0.0
+            })
+            .collect();
         let n = chart.positions.len();
         let mut deg = vec![0usize; n + 1];
         for e in &edges {
@@ -122,7 +150,7 @@ impl ChartGraph {
         for v in 0..n {
             adj[adj_start[v]..adj_start[v + 1]].sort_unstable();
         }
-        ChartGraph { n_vertices: n, polygons, edges, edge_polygons, length, dihedral, adj_start, adj }
+        ChartGraph { n_vertices: n, polygons, edges, edge_polygons, length, dihedral, concave, adj_start, adj }
     }
 
     /// `(neighbour, edge id)` of vertex `v`.

@@ -11,25 +11,56 @@
 //!    by shortest edge paths; dangling branches pruned.
 //! 3. The caller adds the cut edges to the seams and rebuilds the chart, which is then a disk
 //!    (χ = 1, one boundary loop); [`split`] halves a chart that repair rounds could not make
-//!    valid.
+//!    valid, along the cheapest loop near the half-area level set of its Fiedler vector
+//!    ([`fiedler`], [`min_cut`]; [`planar_split`] when that fails).
 //!
-//! Edge cost of a cut: 3D length, × [`SHARP_FACTOR`] on edges whose dihedral angle is at least
-//! `sharp_angle`, [`AVOID_COST`] (infinite: never cut) on edges touching a vertex the user
-//! asked to keep free of seams (such vertices never become cones). Everything is deterministic: ties break by ids.
+//! Edge cost of a cut ([`edge_costs`]), where an artist would put a seam:
+//! * 3D length;
+//! * × a crease factor: creases from [`CREASE_START`] to [`CREASE_FULL`] of dihedral angle
+//!   grow cheaper, down to [`CONCAVE_FACTOR`] where the surface folds inward (inside the legs,
+//!   behind the ears: seams hide there) and [`CONVEX_FACTOR`] on sharp convex edges (natural
+//!   boundaries, but in view);
+//! * × [`SHARP_FACTOR`] on edges whose dihedral angle is at least `sharp_angle`, if set;
+//! * × `1 + visibility_weight · visibility`, the mean visibility of its ends
+//!   ([`visibility`]: `1 −` ambient occlusion), so exposed smooth surface is dearer than
+//!   hidden surface;
+//! * [`AVOID_COST`] (infinite: never cut) on edges touching a vertex the user asked to keep
+//!   free of seams (such vertices never become cones).
+//!
+//! Everything is deterministic: ties break by ids.
 
 pub mod cones;
 pub mod cut_graph;
+pub mod fiedler;
 pub mod graph;
+pub mod min_cut;
+pub mod planar_split;
 pub mod split;
+pub mod symmetric_cut;
+pub mod symmetry;
+pub mod visibility;
 
 use crate::charts::{Chart, ChartKind};
 use crate::error::{Result, UvError};
 use crate::mesh::PolyMesh;
 
 pub use graph::ChartGraph;
+pub use symmetry::Symmetry;
 
 /// Cost factor of a cut along a sharp edge (cheaper: seams hide along creases).
 pub const SHARP_FACTOR: f64 = 0.2;
+/// Dihedral angle (radians, 30°) from which a crease starts to be cheaper to cut along. Below
+/// it an edge is smooth surface: on coarse meshes many edges turn by 15–25°, and a preference
+/// there makes the cost a noise that paths chase.
+pub const CREASE_START: f64 = 30.0 * std::f64::consts::PI / 180.0;
+/// Dihedral angle (radians, 90°) from which a crease takes its full cost factor.
+pub const CREASE_FULL: f64 = 90.0 * std::f64::consts::PI / 180.0;
+/// Cost factor of a concave crease of at least [`CREASE_FULL`] (the cheapest place for a seam).
+pub const CONCAVE_FACTOR: f64 = 0.2;
+/// Cost factor of a convex crease of at least [`CREASE_FULL`] (a natural boundary, in view).
+pub const CONVEX_FACTOR: f64 = 0.7;
+/// Default [`AutoSeamOptions::visibility_weight`].
+pub const VISIBILITY_WEIGHT: f64 = 1.0;
 /// Cost of a cut along an edge touching an avoided vertex: none is ever cut (*Avoid Seams*
 /// is a constraint, not a preference). A chart that cannot be opened without one stays
 /// uncut there and is reported as breaking the rule.
@@ -56,21 +87,40 @@ pub struct AutoSeamOptions {
     /// Mesh vertices where seams must not go (default none).
     pub avoid_vertices: Vec<u32>,
     /// Dihedral angle (radians) from which an edge counts as sharp and is preferred for
-    /// seams; `None` (default) prefers nothing.
+    /// seams; `None` (default) prefers nothing beyond the built-in crease preference.
     pub sharp_angle: Option<f64>,
+    /// How much dearer a seam is on exposed surface than on hidden surface (default
+    /// [`VISIBILITY_WEIGHT`] = 1: a fully exposed edge costs twice a fully occluded one; 0
+    /// turns the term off and skips the occlusion rays). Visibility is `1 −` ambient occlusion
+    /// per vertex ([`visibility`]); must be finite and in `[0, 100]`.
+    pub visibility_weight: f64,
+    /// Mirror symmetry the seams keep (default [`Symmetry::None`]). When a chart is its own
+    /// mirror image ([`symmetry`]), cut costs and cones are made symmetric (a cone's mirror is
+    /// a cone too, so a chart may get up to twice `max_cones`), and a closed genus-0 chart is
+    /// cut on one half and the cut mirrored ([`symmetric_cut`]): its seams map onto themselves.
+    /// Other charts get symmetric costs and cones only; splits are not mirrored.
+    pub symmetry: Symmetry,
 }
 
 impl Default for AutoSeamOptions {
     fn default() -> Self {
-        AutoSeamOptions { enabled: true, max_stretch: 2.0, max_cones: 8, avoid_vertices: Vec::new(), sharp_angle: None }
+        AutoSeamOptions {
+            enabled: true,
+            max_stretch: 2.0,
+            max_cones: 8,
+            avoid_vertices: Vec::new(),
+            sharp_angle: None,
+            visibility_weight: VISIBILITY_WEIGHT,
+            symmetry: Symmetry::None,
+        }
     }
 }
 
 impl AutoSeamOptions {
     /// Check the options against a mesh of `n_vertices` vertices.
     ///
-    /// Errors: [`UvError::Option`] naming `max_stretch`, `max_cones`, `sharp_angle` or
-    /// `avoid_vertices` (with the entry and vertex).
+    /// Errors: [`UvError::Option`] naming `max_stretch`, `max_cones`, `sharp_angle`,
+    /// `visibility_weight` or `avoid_vertices` (with the entry and vertex).
     pub fn validate(&self, n_vertices: usize) -> Result<()> {
         if !(self.max_stretch.is_finite() && self.max_stretch > 1.0) {
             return Err(UvError::Option {
@@ -88,6 +138,12 @@ impl AutoSeamOptions {
                     reason: format!("must be an angle in radians strictly between 0 and π, got {a}"),
                 });
             }
+        }
+        if !(self.visibility_weight.is_finite() && (0.0..=100.0).contains(&self.visibility_weight)) {
+            return Err(UvError::Option {
+                name: "visibility_weight".into(),
+                reason: format!("must be a number from 0 to 100, got {}", self.visibility_weight),
+            });
         }
         if let Some((i, &v)) = self.avoid_vertices.iter().enumerate().find(|(_, &v)| v as usize >= n_vertices) {
             return Err(UvError::Option {
@@ -120,19 +176,34 @@ pub struct ChartCuts {
     pub length: f64,
     /// Largest |log scale factor| predicted with these cones.
     pub max_log_scale: f64,
+    /// Whether the cut was planned on one half of a mirror-symmetric chart and mirrored (it is
+    /// then its own mirror image).
+    pub mirrored: bool,
 }
 
-/// Per-edge cut costs of `graph` (see the module docs).
-pub fn edge_costs(graph: &ChartGraph, chart: &Chart, options: &AutoSeamOptions, avoid: &[bool]) -> Vec<f64> {
+/// Per-edge cut costs of `graph` (see the module docs). Casts the occlusion rays when
+/// `options.visibility_weight > 0`.
+pub fn edge_costs(mesh: &PolyMesh<'_>, graph: &ChartGraph, chart: &Chart, options: &AutoSeamOptions, avoid: &[bool]) -> Vec<f64> {
+    // A mesh wound inwards has its valleys where the winding sees ridges.
+    let inward = visibility::wound_inward(mesh);
+    let visibility = (options.visibility_weight > 0.0).then(|| visibility::chart_visibility(mesh, chart, inward));
     (0..graph.edges.len())
         .map(|e| {
             let [a, b] = graph.edges[e];
             // A zero-length edge still costs a little, so paths stay short in edge count.
             let mut c = graph.length[e].max(1e-12);
+            if !graph.is_boundary(e) {
+                let ramp = ((graph.dihedral[e] - CREASE_START) / (CREASE_FULL - CREASE_START)).clamp(0.0, 1.0);
+                let full = if graph.concave[e] != inward { CONCAVE_FACTOR } else { CONVEX_FACTOR };
+                c *= 1.0 - ramp * (1.0 - full);
+            }
             if let Some(s) = options.sharp_angle {
                 if graph.dihedral[e] >= s {
                     c *= SHARP_FACTOR;
                 }
+            }
+            if let Some(vis) = &visibility {
+                c *= 1.0 + options.visibility_weight * 0.5 * (vis[a as usize] + vis[b as usize]);
             }
             if avoid[chart.mesh_vertex[a as usize] as usize] || avoid[chart.mesh_vertex[b as usize] as usize] {
                 c = AVOID_COST;
@@ -173,27 +244,53 @@ pub struct ChartCutter<'a> {
     boundary: Vec<bool>,
     min_cones: usize,
     solver: Option<cones::ScaleSolver>,
+    mirror: Option<symmetry::Mirror>,
 }
 
 impl<'a> ChartCutter<'a> {
     /// Analyse `chart` (preconditions of [`cut_chart`]).
     pub fn new(mesh: &PolyMesh<'_>, chart: &'a Chart, options: &'a AutoSeamOptions, avoid: &[bool]) -> Self {
         let graph = ChartGraph::new(mesh, chart);
-        let cost = edge_costs(&graph, chart, options, avoid);
+        let mut cost = edge_costs(mesh, &graph, chart, options, avoid);
         let boundary = chart.boundary_mask();
-        let allowed: Vec<bool> =
+        let mut allowed: Vec<bool> =
             (0..chart.positions.len()).map(|v| !boundary[v] && !avoid[chart.mesh_vertex[v] as usize]).collect();
+        let mirror = symmetry::detect(&graph, &chart.positions, options.symmetry);
+        if let Some(m) = &mirror {
+            // The mean of an edge's cost and its mirror's; forbidden if either is.
+            cost = (0..cost.len())
+                .map(|e| {
+                    let (a, b) = (cost[e], cost[m.edge[e] as usize]);
+                    if a.is_finite() && b.is_finite() {
+                        0.5 * (a + b)
+                    } else {
+                        AVOID_COST
+                    }
+                })
+                .collect();
+            allowed = (0..allowed.len()).map(|v| allowed[v] && allowed[m.vertex[v] as usize]).collect();
+        }
         let min_cones = match (chart.boundary_loops.is_empty(), chart.genus) {
             (true, 0) => 2,
             (true, _) => 1,
             (false, _) => 0,
         };
-        ChartCutter { chart, options, graph, cost, allowed, boundary, min_cones, solver: cones::ScaleSolver::new(chart) }
+        ChartCutter { chart, options, graph, cost, allowed, boundary, min_cones, solver: cones::ScaleSolver::new(chart), mirror }
+    }
+
+    /// The chart's mirror, when [`AutoSeamOptions::symmetry`] asked for one and found it.
+    pub fn mirror(&self) -> Option<&symmetry::Mirror> {
+        self.mirror.as_ref()
     }
 
     /// The edge graph of the chart.
     pub fn graph(&self) -> &ChartGraph {
         &self.graph
+    }
+
+    /// Cut cost of every edge of [`Self::graph`] ([`edge_costs`]).
+    pub fn costs(&self) -> &[f64] {
+        &self.cost
     }
 
     /// Per chart vertex: whether it may become a cone (inside the chart, not avoided).
@@ -205,16 +302,20 @@ impl<'a> ChartCutter<'a> {
     pub fn cut(&self, seed_cones: &[u32], extra_cones: usize) -> ChartCuts {
         let (chart, options, graph, cost, boundary, min_cones) =
             (self.chart, self.options, &self.graph, &self.cost, &self.boundary, self.min_cones);
-        let cones = match &self.solver {
+        let seeds = match &self.mirror {
+            Some(m) => mirrored(seed_cones, m),
+            None => seed_cones.to_vec(),
+        };
+        let mut cones = match &self.solver {
             Some(solver) => cones::place_cones(
                 solver,
                 &self.allowed,
                 min_cones,
                 options.max_cones + extra_cones,
                 options.max_stretch.ln(),
-                seed_cones,
+                &seeds,
             ),
-            None => cones::Cones { vertices: seed_cones.to_vec(), curvature: vec![0.0; seed_cones.len()], u: vec![], max_u: f64::INFINITY },
+            None => cones::Cones { vertices: seeds.clone(), curvature: vec![0.0; seeds.len()], u: vec![], max_u: f64::INFINITY },
         };
         let mut cone_vertices = cones.vertices.clone();
         if cone_vertices.len() < min_cones {
@@ -228,17 +329,39 @@ impl<'a> ChartCutter<'a> {
                 }
             }
         }
-        let loops = if chart.genus > 0 {
-            let root = cone_vertices.first().copied().or_else(|| chart.boundary_loops.first().map(|l| l[0])).unwrap_or(0);
-            cut_graph::handle_loops(graph, cost, root, &chart.boundary_loops)
-        } else {
-            vec![false; graph.edges.len()]
+        if let Some(m) = &self.mirror {
+            // Add the cones' mirrors; solve again with the symmetric set held (its curvature),
+            // which may place a cone more when the set is still short of `min_cones`.
+            for _ in 0..3 {
+                let sym = mirrored(&cone_vertices, m);
+                let Some(solver) = &self.solver else {
+                    cone_vertices = sym;
+                    break;
+                };
+                let again = cones::place_cones(solver, &self.allowed, min_cones, sym.len(), options.max_stretch.ln(), &sym);
+                let done = again.vertices == sym;
+                cone_vertices = again.vertices.clone();
+                cones = again;
+                if done {
+                    break;
+                }
+            }
+            cone_vertices = mirrored(&cone_vertices, m);
+        }
+        let planned = match &self.mirror {
+            Some(m) if chart.boundary_loops.is_empty() && chart.genus == 0 => {
+                symmetric_cut::symmetric_cut(graph, cost, &chart.positions, m, &cone_vertices)
+            }
+            _ => None,
         };
-        let cut = cut_graph::join_and_prune(graph, cost, loops, &cone_vertices, &chart.boundary_loops);
+        let mirrored_cut = planned.is_some();
+        let cut = planned.unwrap_or_else(|| self.plain_cut(&cone_vertices));
         let mut out = ChartCuts {
             cones: cone_vertices.clone(),
-            cone_curvature: cones.curvature.clone(),
+            // Cones added after the solve (none placed, or mirrors) carry no predicted curvature.
+            cone_curvature: if self.mirror.is_none() || cones.vertices == cone_vertices { cones.curvature.clone() } else { Vec::new() },
             max_log_scale: cones.max_u,
+            mirrored: mirrored_cut,
             ..Default::default()
         };
         out.cone_curvature.resize(cone_vertices.len(), 0.0);
@@ -253,4 +376,29 @@ impl<'a> ChartCutter<'a> {
         }
         out
     }
+
+    /// Handle loops (genus > 0) joined to the cones and boundary loops (see [`cut_graph`]).
+    fn plain_cut(&self, cone_vertices: &[u32]) -> Vec<bool> {
+        let (chart, graph, cost) = (self.chart, &self.graph, &self.cost);
+        let loops = if chart.genus > 0 {
+            let root = cone_vertices.first().copied().or_else(|| chart.boundary_loops.first().map(|l| l[0])).unwrap_or(0);
+            cut_graph::handle_loops(graph, cost, root, &chart.boundary_loops)
+        } else {
+            vec![false; graph.edges.len()]
+        };
+        cut_graph::join_and_prune(graph, cost, loops, cone_vertices, &chart.boundary_loops)
+    }
+}
+
+/// `cones` and their mirror images, in order (each new mirror after its cone), without repeats.
+fn mirrored(cones: &[u32], mirror: &symmetry::Mirror) -> Vec<u32> {
+    let mut out: Vec<u32> = Vec::with_capacity(2 * cones.len());
+    for &c in cones {
+        for v in [c, mirror.vertex[c as usize]] {
+            if !out.contains(&v) {
+                out.push(v);
+            }
+        }
+    }
+    out
 }

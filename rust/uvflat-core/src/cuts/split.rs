@@ -1,152 +1,260 @@
-//! Last-resort segmentation: halve a chart that cones and cuts could not make valid.
+//! Last-resort segmentation: halve a chart that cones and cuts could not make valid, along a
+//! smooth loop of cheap edges.
 //!
-//! Precedent: xatlas's piecewise parameterization and split-until-valid segmenters. Here the
-//! chart's polygons are split at the median of their centroids' projection on the principal
-//! axis of the chart (area-weighted covariance of the polygon centroids), so both halves hold
-//! about half the polygons and the new seam crosses the chart's long direction. The caller
-//! rebuilds both halves (each may need cuts of its own) with a bounded depth.
+//! Precedent: spectral mesh segmentation (Liu & Zhang 2004, Zhang et al. 2010's survey) for
+//! where to cut, and graph-cut refinement of a segment boundary inside a fuzzy band (Katz &
+//! Tal 2003) for how: xatlas and PartUV split until valid, with planar or greedy cuts.
+//!
+//! 1. `f`: the chart's Fiedler vector ([`super::fiedler`]); each polygon takes the mean of its
+//!    corners. Polygons sorted by `f` (ties by id) and weighed by area give each polygon its
+//!    area quantile.
+//! 2. For each candidate level `q` of [`LEVELS`] (area quantiles 0.5, 0.4, 0.6, 0.3, 0.7): the
+//!    polygons below `q − BAND/2` are one side, those above `q + BAND/2` the other, and the
+//!    polygons between form a band. The seam is the minimum cut of the band's dual graph
+//!    ([`super::min_cut`]) with the cut cost of each edge as capacity (the caller's costs:
+//!    length, cheaper along creases, infinite on edges that touch an avoided vertex): the
+//!    cheapest loop (or path, on a chart with a boundary) that separates the two sides within
+//!    the band. A level set snapped to polygons would zig-zag across triangle strips; the cut
+//!    follows the straightest, cheapest edges near it instead.
+//! 3. Among levels, one that leaves exactly two connected parts is preferred, then the least
+//!    `cost × (1 + |a − ½|)`, `a` the area share of one side (a mild preference for halves);
+//!    ties keep the earlier level.
+//!
+//! Fallback: [`super::planar_split::halve_planar`] (a plane through the principal axis) when
+//! the chart has fewer than [`SPECTRAL_MIN_POLYGONS`] polygons, the Fiedler vector cannot be
+//! computed, or every level's band is closed off by edges that must not be cut.
+//!
+//! Preconditions: `cost` has one entry per edge of `graph` (non-negative; infinite where a cut
+//! is forbidden). Failures: an empty seam list when the chart has fewer than two polygons or
+//! nothing can be split without touching an avoided vertex. Deterministic: sorts break ties
+//! by ids, the Fiedler vector and the flow have no randomness.
 
+use super::fiedler::fiedler_vector;
 use super::graph::ChartGraph;
+use super::min_cut::min_cut;
+use super::planar_split::halve_planar;
 use crate::charts::Chart;
+use crate::geometry::norm;
 
-/// Seams (mesh vertex pairs) that split `chart` into two parts; empty if it has fewer than two
-/// polygons or every candidate split would touch a vertex in `avoid` (per mesh vertex).
-///
-/// Candidates, in order: the principal axis, then x, y and z, each split at the median of the
-/// polygons, then at the 40/60, 30/70 and 20/80 quantiles.
-pub fn halve(graph: &ChartGraph, chart: &Chart, avoid: &[bool]) -> Vec<[u32; 2]> {
-    let np = graph.polygons.len();
-    if np < 2 {
-        return Vec::new();
-    }
-    let centroid: Vec<[f64; 3]> = graph
-        .polygons
-        .iter()
-        .map(|poly| {
-            let mut c = [0.0; 3];
-            for &v in poly {
-                for k in 0..3 {
-                    c[k] += chart.positions[v as usize][k];
-                }
-            }
-            let n = poly.len() as f64;
-            [c[0] / n, c[1] / n, c[2] / n]
-        })
-        .collect();
-    let mut mean = [0.0; 3];
-    for c in &centroid {
-        for k in 0..3 {
-            mean[k] += c[k] / np as f64;
-        }
-    }
-    let mut cov = [[0.0f64; 3]; 3];
-    for c in &centroid {
-        let d = [c[0] - mean[0], c[1] - mean[1], c[2] - mean[2]];
-        for i in 0..3 {
-            for j in 0..3 {
-                cov[i][j] += d[i] * d[j];
-            }
-        }
-    }
-    // Principal axis by power iteration from a fixed start (deterministic).
-    let mut axis = [1.0, 0.7, 0.3];
-    for _ in 0..64 {
-        let next = [
-            cov[0][0] * axis[0] + cov[0][1] * axis[1] + cov[0][2] * axis[2],
-            cov[1][0] * axis[0] + cov[1][1] * axis[1] + cov[1][2] * axis[2],
-            cov[2][0] * axis[0] + cov[2][1] * axis[1] + cov[2][2] * axis[2],
-        ];
-        let l = (next[0] * next[0] + next[1] * next[1] + next[2] * next[2]).sqrt();
-        if !(l > 0.0) {
-            break;
-        }
-        axis = [next[0] / l, next[1] / l, next[2] / l];
-    }
-    for axis in [axis, [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]] {
-        let proj: Vec<f64> = centroid
-            .iter()
-            .map(|c| (c[0] - mean[0]) * axis[0] + (c[1] - mean[1]) * axis[1] + (c[2] - mean[2]) * axis[2])
-            .collect();
-        let mut order: Vec<usize> = (0..np).collect();
-        order.sort_by(|&a, &b| proj[a].total_cmp(&proj[b]).then(a.cmp(&b)));
-        for q in [0.5, 0.4, 0.6, 0.3, 0.7, 0.2, 0.8] {
-            let k = ((np as f64 * q) as usize).clamp(1, np - 1);
-            let mut side = vec![false; np];
-            for &p in &order[k..] {
-                side[p] = true;
-            }
-            keep_sides_connected(graph, &mut side);
-            let mut seams = Vec::new();
-            let mut touches = false;
-            for (e, p) in graph.edge_polygons.iter().enumerate() {
-                if p[1] != u32::MAX && side[p[0] as usize] != side[p[1] as usize] {
-                    let [a, b] = graph.edges[e];
-                    let (ma, mb) = (chart.mesh_vertex[a as usize], chart.mesh_vertex[b as usize]);
-                    touches |= avoid[ma as usize] || avoid[mb as usize];
-                    seams.push([ma.min(mb), ma.max(mb)]);
-                }
-            }
-            if !touches && !seams.is_empty() {
-                return seams;
-            }
-        }
-    }
-    Vec::new()
+/// Candidate levels (area quantiles of the Fiedler order), in order of preference.
+pub const LEVELS: [f64; 5] = [0.5, 0.4, 0.6, 0.3, 0.7];
+/// Area share of the band around a level in which the seam may move.
+pub const BAND: f64 = 0.2;
+/// Charts with fewer polygons are split by a plane.
+pub const SPECTRAL_MIN_POLYGONS: usize = 8;
+
+/// A split of a chart's polygons into two sides.
+#[derive(Debug, Clone)]
+pub struct Split {
+    /// Seam edges as mesh vertex pairs `[a, b]`, `a < b`, sorted.
+    pub seams: Vec<[u32; 2]>,
+    /// Seam edges as edge ids of the chart graph, ascending.
+    pub edges: Vec<u32>,
+    /// Per polygon of the graph: on the first side.
+    pub side: Vec<bool>,
+    /// Total cut cost of the seam.
+    pub cost: f64,
+    /// Area share of the first side.
+    pub area_share: f64,
+    /// Connected parts left (2 for a clean halving).
+    pub parts: usize,
+    /// The level (area quantile) it was cut at.
+    pub level: f64,
 }
 
-/// Move every connected piece of a side but its largest to the other side, so a split makes
-/// two connected parts instead of a few slivers (a plane through a curved chart can cut off
-/// small fragments).
-fn keep_sides_connected(graph: &ChartGraph, side: &mut [bool]) {
-    let np = side.len();
-    let mut neighbours: Vec<Vec<u32>> = vec![Vec::new(); np];
-    for p in &graph.edge_polygons {
-        if p[1] != u32::MAX {
-            neighbours[p[0] as usize].push(p[1]);
-            neighbours[p[1] as usize].push(p[0]);
+/// Seams (mesh vertex pairs) that split `chart` in two (see the module docs): the spectral
+/// split, or the planar one when that fails. `avoid`: per mesh vertex, whether seams must stay
+/// away from it (the planar fallback checks it; `cost` is infinite there already).
+pub fn halve(graph: &ChartGraph, cost: &[f64], chart: &Chart, avoid: &[bool]) -> Vec<[u32; 2]> {
+    if graph.polygons.len() < 2 {
+        return Vec::new();
+    }
+    if let Some(split) = spectral_halve(graph, cost, chart) {
+        return split.seams;
+    }
+    halve_planar(graph, chart, avoid)
+}
+
+/// Candidate seams for halving `chart`, in order of preference: the spectral split, then the
+/// planar one (when it differs); empty seam lists are left out. The pipeline tries the second
+/// when the halves of the first do not keep the atlas rule.
+pub fn candidates(graph: &ChartGraph, cost: &[f64], chart: &Chart, avoid: &[bool]) -> Vec<Vec<[u32; 2]>> {
+    let mut out = Vec::new();
+    if graph.polygons.len() < 2 {
+        return out;
+    }
+    if let Some(split) = spectral_halve(graph, cost, chart) {
+        out.push(split.seams);
+    }
+    let mut planar = halve_planar(graph, chart, avoid);
+    planar.sort_unstable();
+    planar.dedup();
+    if !planar.is_empty() && out.first() != Some(&planar) {
+        out.push(planar);
+    }
+    out
+}
+
+/// The spectral split of `chart` (steps 1–3 of the module docs), or `None`.
+pub fn spectral_halve(graph: &ChartGraph, cost: &[f64], chart: &Chart) -> Option<Split> {
+    let np = graph.polygons.len();
+    if np < SPECTRAL_MIN_POLYGONS || cost.len() != graph.edges.len() {
+        return None;
+    }
+    let f = fiedler_vector(chart)?;
+    let value: Vec<f64> = graph
+        .polygons
+        .iter()
+        .map(|poly| poly.iter().map(|&v| f[v as usize]).sum::<f64>() / poly.len().max(1) as f64)
+        .collect();
+    let area: Vec<f64> = graph.polygons.iter().map(|poly| polygon_area(chart, poly)).collect();
+    let total: f64 = area.iter().sum();
+    if !(total > 0.0 && total.is_finite()) {
+        return None;
+    }
+    let mut order: Vec<usize> = (0..np).collect();
+    order.sort_by(|&a, &b| value[a].total_cmp(&value[b]).then(a.cmp(&b)));
+    let mut quantile = vec![0.0f64; np];
+    let mut below = 0.0;
+    for &p in &order {
+        quantile[p] = (below + 0.5 * area[p]) / total;
+        below += area[p];
+    }
+    let neighbours = dual_adjacency(graph);
+    let mut best: Option<(bool, f64, Split)> = None;
+    for &q in &LEVELS {
+        let Some(split) = cut_at_level(graph, cost, chart, &quantile, &area, total, &neighbours, q) else { continue };
+        let key = (split.parts != 2, split.cost * (1.0 + (split.area_share - 0.5).abs()));
+        if best.as_ref().is_none_or(|b| (key.0, key.1) < (b.0, b.1)) {
+            best = Some((key.0, key.1, split));
         }
     }
-    for pass in 0..2 {
-        let mut comp = vec![u32::MAX; np];
-        let mut sizes: Vec<(usize, bool)> = Vec::new();
-        for s in 0..np {
-            if comp[s] != u32::MAX {
-                continue;
+    best.map(|b| b.2)
+}
+
+/// The minimum cut of the band around level `q` (step 2), or `None` if a side is empty or the
+/// band cannot be cut at a finite cost.
+#[allow(clippy::too_many_arguments)]
+fn cut_at_level(
+    graph: &ChartGraph,
+    cost: &[f64],
+    chart: &Chart,
+    quantile: &[f64],
+    area: &[f64],
+    total: f64,
+    neighbours: &[Vec<u32>],
+    q: f64,
+) -> Option<Split> {
+    let np = quantile.len();
+    let (lo, hi) = (q - 0.5 * BAND, q + 0.5 * BAND);
+    // Nodes: 0 the low side, 1 the high side, 2.. the band's polygons.
+    let mut node = vec![0u32; np];
+    let mut n_nodes = 2u32;
+    let (mut any_lo, mut any_hi) = (false, false);
+    for p in 0..np {
+        node[p] = if quantile[p] < lo {
+            any_lo = true;
+            0
+        } else if quantile[p] > hi {
+            any_hi = true;
+            1
+        } else {
+            n_nodes += 1;
+            n_nodes - 1
+        };
+    }
+    if !(any_lo && any_hi) {
+        return None;
+    }
+    let mut arcs: Vec<(u32, u32, f64)> = Vec::new();
+    for (e, pp) in graph.edge_polygons.iter().enumerate() {
+        if pp[1] == u32::MAX || pp[0] == pp[1] {
+            continue;
+        }
+        let (a, b) = (node[pp[0] as usize], node[pp[1] as usize]);
+        if a == b {
+            continue;
+        }
+        if a.max(b) == 1 {
+            // The two sides touch: the edge is cut whatever the band does.
+            if !cost[e].is_finite() {
+                return None;
             }
-            let id = sizes.len() as u32;
-            let mut stack = vec![s];
-            comp[s] = id;
-            let mut n = 0;
-            while let Some(p) = stack.pop() {
-                n += 1;
-                for &q in &neighbours[p] {
-                    let q = q as usize;
-                    if comp[q] == u32::MAX && side[q] == side[s] {
-                        comp[q] = id;
-                        stack.push(q);
-                    }
+            continue;
+        }
+        arcs.push((a, b, cost[e]));
+    }
+    let cut = min_cut(n_nodes as usize, &arcs, 0, 1)?;
+    let side: Vec<bool> = node.iter().map(|&n| cut.source_side[n as usize]).collect();
+    let mut edges = Vec::new();
+    let mut seams = Vec::new();
+    let mut cut_cost = 0.0;
+    for (e, pp) in graph.edge_polygons.iter().enumerate() {
+        if pp[1] != u32::MAX && side[pp[0] as usize] != side[pp[1] as usize] {
+            edges.push(e as u32);
+            cut_cost += cost[e];
+            let [a, b] = graph.edges[e];
+            let (ma, mb) = (chart.mesh_vertex[a as usize], chart.mesh_vertex[b as usize]);
+            seams.push([ma.min(mb), ma.max(mb)]);
+        }
+    }
+    if seams.is_empty() || !cut_cost.is_finite() {
+        return None;
+    }
+    seams.sort_unstable();
+    seams.dedup();
+    let first: f64 = (0..np).filter(|&p| side[p]).map(|p| area[p]).sum();
+    let parts = count_parts(neighbours, &side);
+    Some(Split { seams, edges, side, cost: cut_cost, area_share: first / total, parts, level: q })
+}
+
+/// 3D area of a polygon (half the length of Newell's normal).
+fn polygon_area(chart: &Chart, poly: &[u32]) -> f64 {
+    let mut n = [0.0; 3];
+    for i in 0..poly.len() {
+        let a = chart.positions[poly[i] as usize];
+        let b = chart.positions[poly[(i + 1) % poly.len()] as usize];
+        n[0] += (a[1] - b[1]) * (a[2] + b[2]);
+        n[1] += (a[2] - b[2]) * (a[0] + b[0]);
+        n[2] += (a[0] - b[0]) * (a[1] + b[1]);
+    }
+    0.5 * norm(n)
+}
+
+/// Polygons sharing an interior edge, per polygon.
+fn dual_adjacency(graph: &ChartGraph) -> Vec<Vec<u32>> {
+    let mut nb: Vec<Vec<u32>> = vec![Vec::new(); graph.polygons.len()];
+    for p in &graph.edge_polygons {
+        if p[1] != u32::MAX && p[0] != p[1] {
+            nb[p[0] as usize].push(p[1]);
+            nb[p[1] as usize].push(p[0]);
+        }
+    }
+    nb
+}
+
+/// Connected parts of the polygons when edges between the two sides are cut.
+fn count_parts(neighbours: &[Vec<u32>], side: &[bool]) -> usize {
+    let n = side.len();
+    let mut seen = vec![false; n];
+    let mut parts = 0;
+    let mut stack = Vec::new();
+    for s in 0..n {
+        if seen[s] {
+            continue;
+        }
+        parts += 1;
+        seen[s] = true;
+        stack.push(s);
+        while let Some(p) = stack.pop() {
+            for &q in &neighbours[p] {
+                let q = q as usize;
+                if !seen[q] && side[q] == side[p] {
+                    seen[q] = true;
+                    stack.push(q);
                 }
             }
-            sizes.push((n, side[s]));
-        }
-        // Largest component of each side (first one on ties: deterministic).
-        let mut best = [None::<usize>; 2];
-        for (c, &(n, sd)) in sizes.iter().enumerate() {
-            let slot = &mut best[sd as usize];
-            if slot.is_none_or(|b| n > sizes[b].0) {
-                *slot = Some(c);
-            }
-        }
-        let mut changed = false;
-        for p in 0..np {
-            let c = comp[p] as usize;
-            if Some(c) != best[sizes[c].1 as usize] && best[!sizes[c].1 as usize].is_some() {
-                side[p] = !side[p];
-                changed = true;
-            }
-        }
-        if !changed || pass == 1 {
-            break;
         }
     }
+    parts
 }

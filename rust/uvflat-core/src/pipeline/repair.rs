@@ -6,8 +6,10 @@
 //! the worst density (or a flip) of the first piece that breaks the rule, and re-cuts. The
 //! best attempt is kept (fewest failures, flips, overlaps, non-disks, then the least area
 //! beyond the density bound, then the fewest pieces). When no round keeps the rule, the chart
-//! is halved ([`crate::cuts::split`]) and each half goes through the pipeline again, to a
-//! bounded depth; the halves replace the chart only when they are better.
+//! is halved ([`crate::cuts::split`], along the cheapest loop by the cutter's edge costs) and
+//! each half goes through the pipeline again, to a bounded depth; the halves replace the chart
+//! only when they are better. At the last split level the planar split is tried too when the
+//! spectral one leaves a piece that breaks the rule.
 //!
 //! Bounded: at most `1 + REPAIR_ROUNDS` solves per chart and level, `MAX_SPLIT_DEPTH` levels.
 //! Deterministic: every choice breaks ties by ids.
@@ -85,10 +87,14 @@ pub fn repair(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], dep
         }
     }
     if !all_valid(ctx, &best) && depth < cuts::MAX_SPLIT_DEPTH && chart.faces.len() >= 2 {
+        // The spectral split; at the last split level, where the halves cannot be split again,
+        // also the planar one when the first leaves a piece that breaks the rule (one more
+        // attempt per chart of that level, so the work stays bounded).
         let t = std::time::Instant::now();
-        let split = cuts::split::halve(cutter.graph(), chart, ctx.avoid);
+        let candidates = cuts::split::candidates(cutter.graph(), cutter.costs(), chart, ctx.avoid);
         ctx.clock.add(|p| p.plan_cuts += t.elapsed().as_secs_f64());
-        if !split.is_empty() {
+        let tries = if depth + 1 == cuts::MAX_SPLIT_DEPTH { candidates.len() } else { 1 };
+        for split in candidates.into_iter().take(tries).filter(|s| !s.is_empty()) {
             ctx.clock.add(|p| p.splits += 1);
             let mut all: Vec<[u32; 2]> = base_seams.to_vec();
             all.extend_from_slice(&split);
@@ -106,7 +112,10 @@ pub fn repair(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], dep
                 out.extend(list);
             }
             if better(ctx, &out, &best) {
-                return out;
+                best = out;
+            }
+            if all_valid(ctx, &best) {
+                break;
             }
         }
     }

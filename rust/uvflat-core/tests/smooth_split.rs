@@ -1,0 +1,221 @@
+//! The last-resort split of a chart follows a smooth loop: on tubes (straight, bumpy, bent
+//! into a U) the seam is one closed loop around the tube, about as long as the tube's
+//! circumference there, and it halves the area.
+
+use uvflat_core::charts::build_charts;
+use uvflat_core::cuts::{self, split, AutoSeamOptions, ChartGraph};
+use uvflat_core::mesh::PolyMesh;
+
+use std::f64::consts::{PI, TAU};
+
+struct Mesh {
+    positions: Vec<[f64; 3]>,
+    corner_verts: Vec<u32>,
+    face_sizes: Vec<u32>,
+}
+
+/// A closed surface of revolution about z from rings `(z, radius)` (first and last are the
+/// poles, radius 0): `n` vertices per ring, each ring turned half a step from the previous one
+/// (an antiprism triangulation, so no ring of edges is where a level set of faces would fall).
+fn revolve(rings: &[(f64, f64)], n: usize) -> Mesh {
+    let mut positions = vec![[0.0, 0.0, rings[0].0]];
+    let inner = &rings[1..rings.len() - 1];
+    for (j, &(z, r)) in inner.iter().enumerate() {
+        for k in 0..n {
+            let a = TAU * (k as f64 + 0.5 * j as f64) / n as f64;
+            positions.push([r * a.cos(), r * a.sin(), z]);
+        }
+    }
+    positions.push([0.0, 0.0, rings[rings.len() - 1].0]);
+    let top = (positions.len() - 1) as u32;
+    let id = |j: usize, k: usize| (1 + j * n + k % n) as u32;
+    let mut cv = Vec::new();
+    for k in 0..n {
+        cv.extend([0, id(0, k + 1), id(0, k)]);
+    }
+    for j in 0..inner.len() - 1 {
+        for k in 0..n {
+            cv.extend([id(j, k), id(j, k + 1), id(j + 1, k)]);
+            cv.extend([id(j, k + 1), id(j + 1, k + 1), id(j + 1, k)]);
+        }
+    }
+    let last = inner.len() - 1;
+    for k in 0..n {
+        cv.extend([id(last, k), id(last, k + 1), top]);
+    }
+    let face_sizes = vec![3; cv.len() / 3];
+    Mesh { positions, corner_verts: cv, face_sizes }
+}
+
+/// Rings of a capsule: hemispherical caps of radius `radius(0)` and `radius(length)` joined by
+/// a tube of radius `radius(z)`, `z ∈ [0, length]`, rings about `step` apart.
+fn capsule_rings(length: f64, step: f64, radius: impl Fn(f64) -> f64) -> Vec<(f64, f64)> {
+    let (r0, r1) = (radius(0.0), radius(length));
+    let cap = |r: f64| ((0.5 * PI * r / step).round() as usize).max(2);
+    let mut rings = Vec::new();
+    let m0 = cap(r0);
+    for i in 0..m0 {
+        let phi = 0.5 * PI * i as f64 / m0 as f64;
+        rings.push((-r0 * phi.cos(), r0 * phi.sin()));
+    }
+    let m = (length / step).round() as usize;
+    for i in 0..=m {
+        let z = length * i as f64 / m as f64;
+        rings.push((z, radius(z)));
+    }
+    let m1 = cap(r1);
+    for i in (0..m1).rev() {
+        let phi = 0.5 * PI * i as f64 / m1 as f64;
+        rings.push((length + r1 * phi.cos(), r1 * phi.sin()));
+    }
+    rings
+}
+
+struct Outcome {
+    /// Seam edges as position pairs.
+    seam: Vec<[[f64; 3]; 2]>,
+    length: f64,
+    split: split::Split,
+    /// Vertices of the seam whose seam degree is not 2.
+    odd_vertices: usize,
+    /// Connected pieces of the seam graph.
+    seam_components: usize,
+}
+
+fn halve(m: &Mesh) -> Outcome {
+    let mesh = PolyMesh::new(&m.positions, &m.corner_verts, &m.face_sizes).unwrap();
+    let charts = build_charts(&mesh, &[], None);
+    assert_eq!(charts.len(), 1);
+    let chart = &charts[0];
+    let graph = ChartGraph::new(&mesh, chart);
+    let avoid = vec![false; m.positions.len()];
+    let cost = cuts::edge_costs(&mesh, &graph, chart, &AutoSeamOptions::default(), &avoid);
+    let split = split::spectral_halve(&graph, &cost, chart).expect("the spectral split works on a tube");
+    // The pipeline's entry point gives the same seams.
+    assert_eq!(split::halve(&graph, &cost, chart, &avoid), split.seams);
+    let mut degree = std::collections::BTreeMap::<u32, usize>::new();
+    let mut seam = Vec::new();
+    let mut length = 0.0;
+    let mut uf: Vec<usize> = (0..chart.positions.len()).collect();
+    fn find(uf: &mut [usize], x: usize) -> usize {
+        let mut r = x;
+        while uf[r] != r {
+            r = uf[r];
+        }
+        uf[x] = r;
+        r
+    }
+    for &e in &split.edges {
+        let [a, b] = graph.edges[e as usize];
+        *degree.entry(a).or_default() += 1;
+        *degree.entry(b).or_default() += 1;
+        let (pa, pb) = (chart.positions[a as usize], chart.positions[b as usize]);
+        length += graph.length[e as usize];
+        seam.push([pa, pb]);
+        let (ra, rb) = (find(&mut uf, a as usize), find(&mut uf, b as usize));
+        uf[ra] = rb;
+    }
+    let odd_vertices = degree.values().filter(|&&d| d != 2).count();
+    let mut roots: Vec<usize> = degree.keys().map(|&v| find(&mut uf, v as usize)).collect();
+    roots.sort_unstable();
+    roots.dedup();
+    // Rebuilt with the seams, the chart falls in two parts.
+    let halves = build_charts(&mesh, &split.seams, None);
+    assert_eq!(halves.len(), split.parts);
+    Outcome { seam, length, split, odd_vertices, seam_components: roots.len() }
+}
+
+fn check_loop(name: &str, o: &Outcome, circumference: f64) {
+    assert_eq!(o.odd_vertices, 0, "{name}: the seam has vertices of degree ≠ 2 (a zig-zag or a branch)");
+    assert_eq!(o.seam_components, 1, "{name}: the seam is not one loop");
+    assert_eq!(o.split.parts, 2, "{name}: {} parts", o.split.parts);
+    assert!(
+        o.length <= 1.3 * circumference,
+        "{name}: seam of length {:.3} for a circumference of {:.3} (ratio {:.3})",
+        o.length,
+        circumference,
+        o.length / circumference
+    );
+    assert!((o.split.area_share - 0.5).abs() <= 0.1 + 1e-9, "{name}: area share {:.3}", o.split.area_share);
+}
+
+#[test]
+fn a_capsule_is_halved_along_a_loop_around_it() {
+    let (length, n) = (8.0, 32);
+    let step = TAU / n as f64 * 0.87;
+    let m = revolve(&capsule_rings(length, step, |_| 1.0), n);
+    let o = halve(&m);
+    // The exact ring would be the inscribed polygon; 2π bounds it from above.
+    check_loop("capsule", &o, TAU);
+    // Around the middle of the tube, not on a cap.
+    for [a, b] in &o.seam {
+        assert!(a[2] > 0.5 && b[2] < length - 0.5, "seam edge {a:?}–{b:?} is not on the tube");
+    }
+    // The loop runs around the tube: its edges are nearly horizontal (a staircase climbs).
+    let rise: f64 = o.seam.iter().map(|[a, b]| (a[2] - b[2]).abs()).sum();
+    assert!(rise < 0.1 * o.length, "the seam climbs {rise:.3} over a length {:.3}", o.length);
+}
+
+#[test]
+fn a_bumpy_tube_is_halved_near_a_waist_with_a_loop_no_longer_than_its_circumference_there() {
+    let (length, n) = (10.0, 40);
+    let radius = |z: f64| 1.0 + 0.3 * (TAU * z / 2.5).sin();
+    let step = TAU / n as f64 * 0.8;
+    let m = revolve(&capsule_rings(length, step, radius), n);
+    let o = halve(&m);
+    let mean_z = o.seam.iter().map(|[a, b]| a[2] + b[2]).sum::<f64>() / (2 * o.seam.len()) as f64;
+    check_loop("bumpy tube", &o, TAU * radius(mean_z));
+    // The band around the half-area level holds a waist (radius 0.7, near z = 4.375): the
+    // cheapest loop is the waist's, not the one at the half-area level (radius 1 at z = 5).
+    assert!(o.length < 1.15 * TAU * 0.7, "length {:.3} at z ≈ {mean_z:.3}", o.length);
+}
+
+#[test]
+fn a_hairpin_tube_is_halved_across_the_bend_not_across_both_arms() {
+    // A capsule bent into a hairpin: two straight arms of length 8 joined by a half circle of
+    // radius 2. A plane across the principal axis (along the arms) would cut both arms; the
+    // Fiedler vector runs along the tube, and the half-area loop goes around the bend.
+    let (arm, bend, n) = (8.0, 2.0, 32);
+    let length = 2.0 * arm + PI * bend;
+    let step = TAU / n as f64 * 0.87;
+    let mut m = revolve(&capsule_rings(length, step, |_| 1.0), n);
+    for p in &mut m.positions {
+        let [x, y, z] = *p;
+        let s = z.clamp(0.0, length);
+        let a = ((s - arm) / bend).clamp(0.0, PI);
+        let c = if s < arm {
+            [bend, s - arm, 0.0]
+        } else if s <= arm + PI * bend {
+            [bend * a.cos(), bend * a.sin(), 0.0]
+        } else {
+            [-bend, -(s - arm - PI * bend), 0.0]
+        };
+        let (t, nrm) = ([-a.sin(), a.cos(), 0.0], [a.cos(), a.sin(), 0.0]);
+        let along = z - s;
+        *p = [
+            c[0] + along * t[0] + x * nrm[0],
+            c[1] + along * t[1] + x * nrm[1],
+            c[2] + along * t[2] + x * nrm[2] - y,
+        ];
+    }
+    let o = halve(&m);
+    check_loop("hairpin", &o, TAU);
+    // Every seam vertex lies in the bend (y > 0; the arms are at y ≤ 0), within the band about
+    // its middle: a fifth of the area is about 4.5 of the tube's length, ±0.36π of the bend.
+    for [a, b] in &o.seam {
+        for p in [a, b] {
+            let angle = p[1].atan2(p[0]);
+            assert!(p[1] > 0.0 && (angle - 0.5 * PI).abs() < 0.4 * PI, "seam vertex {p:?} at angle {angle:.3}");
+        }
+    }
+}
+
+#[test]
+fn the_split_is_identical_across_thread_counts() {
+    let m = revolve(&capsule_rings(6.0, 0.2, |z| 1.0 + 0.2 * z.sin()), 24);
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| halve(&m).split.seams)
+    };
+    assert_eq!(run(1), run(2));
+}
