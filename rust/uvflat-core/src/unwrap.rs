@@ -133,7 +133,7 @@ pub fn unwrap(input: &MeshInput<'_>, options: &UnwrapOptions) -> Result<Unwrappe
         avoid[v as usize] = true;
     }
     let rule = AtlasRule { max_stretch: options.auto_seams.max_stretch, full: options.auto_seams.enabled };
-    let ctx = Context { mesh: &mesh, render: render.as_ref(), pins: &pin_of_corner, options, avoid: &avoid, rule, clock: Default::default() };
+    let ctx = Context { mesh: &mesh, render: render.as_ref(), pins: &pin_of_corner, options, avoid: &avoid, rule, clock: Default::default(), visibility: crate::cuts::visibility::VisibilityCache::new(mesh.n_corners()) };
     ctx.clock.add(|p| p.build_charts = started.elapsed().as_secs_f64());
     // With a Progress: charts after a cancel are skipped (None), and the unwrap is an error.
     let total = charts.len();

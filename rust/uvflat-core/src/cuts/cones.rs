@@ -16,8 +16,13 @@
 //! is `K̂_c = K_c + (L u)_c`; the cone curvatures (with the boundary's) add up to 2πχ.
 //!
 //! Linear algebra: the Dirichlet vertices are held by a large diagonal penalty so the sparsity
-//! pattern never changes: one symbolic Cholesky analysis per chart, one numeric refactor per
-//! cone set.
+//! pattern never changes: one symbolic Cholesky analysis and one numeric factorization per
+//! chart, with the boundary held (and, on a closed chart, a ground vertex: the vertex of
+//! largest curvature). Cones are held on top of that factor by the capacitance method: with
+//! `g_c = L₀⁻¹ e_c` (one pair of triangular solves per cone, remembered), the scale factor
+//! with cones `C` is `u = u₀ + Σ_c λ_c g_c` where `G_CC λ = −u₀|_C` (a small dense system), so
+//! trying a cone costs two triangular solves, not a factorization. A closed chart whose cone
+//! set leaves out the ground vertex is refactored with the penalty (the ground must be held).
 //!
 //! Preconditions: a chart without defects. Degenerate triangles are safe: cotangents come
 //! from clamped angles (every triangle contributes the stiffness of a valid triangle, so `L`
@@ -66,6 +71,20 @@ pub struct ScaleSolver {
     pub defect: Vec<f64>,
     /// Whether each vertex is on the chart's boundary.
     pub boundary: Vec<bool>,
+    /// The factor with the boundary (and the ground vertex) held, made on first use.
+    base_factor: std::sync::OnceLock<Option<BaseFactor>>,
+}
+
+/// [`ScaleSolver`]'s factor with the boundary and ground held, its solution and the cones'
+/// columns of its inverse.
+struct BaseFactor {
+    llt: Llt<usize, f64>,
+    /// On a closed chart, the vertex held to make the system definite.
+    ground: Option<u32>,
+    /// `u` with only the boundary and ground held.
+    u0: Vec<f64>,
+    /// `L₀⁻¹ e_c` per cone tried so far.
+    green: std::sync::Mutex<std::collections::HashMap<u32, std::sync::Arc<Vec<f64>>>>,
 }
 
 impl ScaleSolver {
@@ -111,11 +130,93 @@ impl ScaleSolver {
                 base.push(e.2);
             }
         }
-        Some(ScaleSolver { n, base, diag, entries, symbolic, argsort, llt, penalty: 1e8 * max_diag.max(1e-300), defect, boundary })
+        Some(ScaleSolver { n, base, diag, entries, symbolic, argsort, llt, penalty: 1e8 * max_diag.max(1e-300), defect, boundary, base_factor: std::sync::OnceLock::new() })
     }
 
     /// Solve for `u` with `fixed` vertices (and the boundary) held at zero.
     pub fn solve(&self, fixed: &[u32]) -> Option<Vec<f64>> {
+        match self.base() {
+            Some(base) if base.ground.is_none_or(|g| fixed.contains(&g)) => self.solve_on_base(base, fixed),
+            _ => self.solve_refactored(fixed),
+        }
+    }
+
+    /// The base factor (boundary and ground held), made once.
+    fn base(&self) -> Option<&BaseFactor> {
+        self.base_factor
+            .get_or_init(|| {
+                let ground = if self.boundary.iter().any(|&b| b) {
+                    None
+                } else {
+                    (0..self.n).max_by(|&a, &b| self.defect[a].total_cmp(&self.defect[b]).then(b.cmp(&a))).map(|v| v as u32)
+                };
+                let held: Vec<u32> = ground.into_iter().collect();
+                let (llt, u0) = self.factor_and_solve(&held)?;
+                Some(BaseFactor { llt, ground, u0, green: Default::default() })
+            })
+            .as_ref()
+    }
+
+    /// `u` with `fixed` held, by the capacitance method on the base factor (module docs).
+    fn solve_on_base(&self, base: &BaseFactor, fixed: &[u32]) -> Option<Vec<f64>> {
+        let mut cones: Vec<u32> = Vec::with_capacity(fixed.len());
+        for &c in fixed {
+            if !self.boundary[c as usize] && Some(c) != base.ground && !cones.contains(&c) {
+                cones.push(c);
+            }
+        }
+        let mut u = base.u0.clone();
+        if !cones.is_empty() {
+            let columns: Vec<std::sync::Arc<Vec<f64>>> = cones.iter().map(|&c| self.green(base, c)).collect();
+            let k = cones.len();
+            // G_CC λ = −u₀|_C, G_CC symmetric positive definite (Cholesky, by hand: k is small).
+            let mut g: Vec<f64> = (0..k * k).map(|ij| columns[ij % k][cones[ij / k] as usize]).collect();
+            let mut lambda: Vec<f64> = cones.iter().map(|&c| -base.u0[c as usize]).collect();
+            if !dense_cholesky_solve(&mut g, &mut lambda, k) {
+                return self.solve_refactored(fixed);
+            }
+            for (col, l) in columns.iter().zip(&lambda) {
+                for (x, gc) in u.iter_mut().zip(col.iter()) {
+                    *x += l * gc;
+                }
+            }
+            // Held vertices are exactly zero (the penalty leaves them at ~1e-8 of the rest).
+            for &c in &cones {
+                u[c as usize] = 0.0;
+            }
+            if let Some(g) = base.ground {
+                u[g as usize] = 0.0;
+            }
+            for (x, &b) in u.iter_mut().zip(&self.boundary) {
+                if b {
+                    *x = 0.0;
+                }
+            }
+        }
+        u.iter().all(|x| x.is_finite()).then_some(u)
+    }
+
+    /// `L₀⁻¹ e_c`, remembered.
+    fn green(&self, base: &BaseFactor, c: u32) -> std::sync::Arc<Vec<f64>> {
+        if let Some(g) = base.green.lock().unwrap_or_else(|e| e.into_inner()).get(&c) {
+            return g.clone();
+        }
+        let mut rhs = Mat::<f64>::zeros(self.n, 1);
+        rhs[(c as usize, 0)] = 1.0;
+        base.llt.solve_in_place(rhs.as_mut());
+        let col = std::sync::Arc::new((0..self.n).map(|i| rhs[(i, 0)]).collect::<Vec<f64>>());
+        base.green.lock().unwrap_or_else(|e| e.into_inner()).insert(c, col.clone());
+        col
+    }
+
+    /// `u` with `fixed` held, by a numeric factorization of its own (penalty on the diagonal):
+    /// the reference [`Self::solve`] agrees with.
+    pub fn solve_refactored(&self, fixed: &[u32]) -> Option<Vec<f64>> {
+        self.factor_and_solve(fixed).map(|(_, u)| u)
+    }
+
+    /// Factor `L` with `fixed` and the boundary held, and solve for `u`.
+    fn factor_and_solve(&self, fixed: &[u32]) -> Option<(Llt<usize, f64>, Vec<f64>)> {
         let mut values = self.base.clone();
         let mut held = self.boundary.clone();
         for &c in fixed {
@@ -131,7 +232,7 @@ impl ScaleSolver {
         let mut rhs = Mat::<f64>::from_fn(self.n, 1, |i, _| if held[i] { 0.0 } else { -self.defect[i] });
         f.solve_in_place(rhs.as_mut());
         let u: Vec<f64> = (0..self.n).map(|i| if held[i] { 0.0 } else { rhs[(i, 0)] }).collect();
-        u.iter().all(|x| x.is_finite()).then_some(u)
+        u.iter().all(|x| x.is_finite()).then_some((f, u))
     }
 
     /// `K_v + (L u)_v`: the curvature left at `v` by the scale factor `u`.
@@ -245,4 +346,42 @@ pub fn place_cones(
     }
     let curvature = cones.iter().map(|&c| solver.curvature_at(&u, c)).collect();
     Cones { vertices: cones, curvature, max_u: max_abs(&u), u }
+}
+
+/// Solve `A x = b` in place (`a`: `k × k` row-major, symmetric positive definite; `b` becomes
+/// `x`). `false` when `A` is not numerically positive definite.
+fn dense_cholesky_solve(a: &mut [f64], b: &mut [f64], k: usize) -> bool {
+    for j in 0..k {
+        let mut d = a[j * k + j];
+        for p in 0..j {
+            d -= a[j * k + p] * a[j * k + p];
+        }
+        if !(d > 0.0) || !d.is_finite() {
+            return false;
+        }
+        let d = d.sqrt();
+        a[j * k + j] = d;
+        for i in j + 1..k {
+            let mut x = a[i * k + j];
+            for p in 0..j {
+                x -= a[i * k + p] * a[j * k + p];
+            }
+            a[i * k + j] = x / d;
+        }
+    }
+    for i in 0..k {
+        let mut x = b[i];
+        for p in 0..i {
+            x -= a[i * k + p] * b[p];
+        }
+        b[i] = x / a[i * k + i];
+    }
+    for i in (0..k).rev() {
+        let mut x = b[i];
+        for p in i + 1..k {
+            x -= a[p * k + i] * b[p];
+        }
+        b[i] = x / a[i * k + i];
+    }
+    true
 }

@@ -65,7 +65,7 @@ pub const VISIBILITY_WEIGHT: f64 = 1.0;
 /// is a constraint, not a preference). A chart that cannot be opened without one stays
 /// uncut there and is reported as breaking the rule.
 pub const AVOID_COST: f64 = f64::INFINITY;
-/// Most cones a repair round may add to a chart on top of `max_cones`.
+/// Most repair rounds per chart and split level (each may add cones on top of `max_cones`).
 pub const REPAIR_ROUNDS: usize = 3;
 /// Most halvings of one chart when cones cannot make it valid.
 pub const MAX_SPLIT_DEPTH: usize = 4;
@@ -184,9 +184,24 @@ pub struct ChartCuts {
 /// Per-edge cut costs of `graph` (see the module docs). Casts the occlusion rays when
 /// `options.visibility_weight > 0`.
 pub fn edge_costs(mesh: &PolyMesh<'_>, graph: &ChartGraph, chart: &Chart, options: &AutoSeamOptions, avoid: &[bool]) -> Vec<f64> {
+    edge_costs_cached(mesh, graph, chart, options, avoid, None)
+}
+
+/// [`edge_costs`], taking the visibility from `cache` when it knows the chart's corners.
+pub fn edge_costs_cached(
+    mesh: &PolyMesh<'_>,
+    graph: &ChartGraph,
+    chart: &Chart,
+    options: &AutoSeamOptions,
+    avoid: &[bool],
+    cache: Option<&visibility::VisibilityCache>,
+) -> Vec<f64> {
     // A mesh wound inwards has its valleys where the winding sees ridges.
     let inward = visibility::wound_inward(mesh);
-    let visibility = (options.visibility_weight > 0.0).then(|| visibility::chart_visibility(mesh, chart, inward));
+    let visibility = (options.visibility_weight > 0.0).then(|| match cache {
+        Some(c) => c.chart(mesh, chart, inward),
+        None => visibility::chart_visibility(mesh, chart, inward),
+    });
     (0..graph.edges.len())
         .map(|e| {
             let [a, b] = graph.edges[e];
@@ -250,8 +265,20 @@ pub struct ChartCutter<'a> {
 impl<'a> ChartCutter<'a> {
     /// Analyse `chart` (preconditions of [`cut_chart`]).
     pub fn new(mesh: &PolyMesh<'_>, chart: &'a Chart, options: &'a AutoSeamOptions, avoid: &[bool]) -> Self {
+        Self::with_cache(mesh, chart, options, avoid, None)
+    }
+
+    /// [`Self::new`], with the visibility of the chart's corners from `cache` when known
+    /// (the pipeline keeps one per unwrap, so a chart's pieces do not cast rays again).
+    pub fn with_cache(
+        mesh: &PolyMesh<'_>,
+        chart: &'a Chart,
+        options: &'a AutoSeamOptions,
+        avoid: &[bool],
+        cache: Option<&visibility::VisibilityCache>,
+    ) -> Self {
         let graph = ChartGraph::new(mesh, chart);
-        let mut cost = edge_costs(mesh, &graph, chart, options, avoid);
+        let mut cost = edge_costs_cached(mesh, &graph, chart, options, avoid, cache);
         let boundary = chart.boundary_mask();
         let mut allowed: Vec<bool> =
             (0..chart.positions.len()).map(|v| !boundary[v] && !avoid[chart.mesh_vertex[v] as usize]).collect();

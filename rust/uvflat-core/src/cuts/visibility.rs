@@ -454,3 +454,49 @@ mod tests {
         }
     }
 }
+
+/// Visibility remembered per mesh corner, so the pieces of a chart (repair's halves and their
+/// halves) reuse the rays cast for the chart instead of casting them again.
+///
+/// Keyed by corner: a corner belongs to one face, so one input chart, and charts solved in
+/// parallel never write the same entry (the result does not depend on the thread count). A
+/// piece's vertex takes the value of its corners, all cast from the same vertex of the chart
+/// the piece came from.
+#[derive(Debug)]
+pub struct VisibilityCache(std::sync::Mutex<Vec<f64>>);
+
+impl VisibilityCache {
+    /// An empty cache for a mesh of `n_corners` corners.
+    pub fn new(n_corners: usize) -> Self {
+        VisibilityCache(std::sync::Mutex::new(vec![f64::NAN; n_corners]))
+    }
+
+    /// [`chart_visibility`] of `chart`, from the cache when every corner of the chart is known.
+    pub fn chart(&self, mesh: &PolyMesh<'_>, chart: &Chart, inward: bool) -> Vec<f64> {
+        {
+            let known = self.0.lock().unwrap_or_else(|e| e.into_inner());
+            let mut out = vec![f64::NAN; chart.positions.len()];
+            let mut all = true;
+            for &(c, v) in &chart.corner_vertex {
+                match known.get(c as usize) {
+                    Some(x) if x.is_finite() => out[v as usize] = *x,
+                    _ => {
+                        all = false;
+                        break;
+                    }
+                }
+            }
+            if all && out.iter().all(|x| x.is_finite()) {
+                return out;
+            }
+        }
+        let vis = chart_visibility(mesh, chart, inward);
+        let mut known = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        for &(c, v) in &chart.corner_vertex {
+            if let Some(x) = known.get_mut(c as usize) {
+                *x = vis[v as usize];
+            }
+        }
+        vis
+    }
+}

@@ -54,6 +54,8 @@ pub struct Context<'a, 'm> {
     pub rule: AtlasRule,
     /// Seconds per step, summed over charts.
     pub clock: phases::PhaseClock,
+    /// Occlusion rays cast so far, per corner (a chart's pieces reuse its rays).
+    pub visibility: crate::cuts::visibility::VisibilityCache,
 }
 
 /// One solved piece of the output: an input chart as built, or a piece of it made by cuts.

@@ -2,8 +2,12 @@
 //!
 //! Precedents: xatlas's piecewise parameterization and PartUV's split-until-valid. Round 0
 //! cuts the chart as planned by [`crate::cuts::ChartCutter`] (cones on the scale factor, handle
-//! loops, holes joined to the outline); each further round adds one cone at the vertex of
-//! the worst density (or a flip) of the first piece that breaks the rule, and re-cuts. The
+//! loops, holes joined to the outline); each further round adds a cone in each of the
+//! largest crushed regions of the first piece that breaks the rule (up to
+//! `CONES_PER_ROUND`; a flip or zero-area triangle counts as crushed), and re-cuts. A round
+//! that does not bring the chart clearly nearer the rule (`PROGRESS`) is not built on: after
+//! several cones at once, the rounds go back to the best attempt and add one cone at a time;
+//! after one cone, they end and the chart is split (each round is a whole solve). The
 //! best attempt is kept (fewest failures, flips, overlaps, non-disks, then the least area
 //! beyond the density bound, then the fewest pieces). When no round keeps the rule, the chart
 //! is halved ([`crate::cuts::split`], along the cheapest loop by the cutter's edge costs) and
@@ -12,6 +16,7 @@
 //! spectral one leaves a piece that breaks the rule.
 //!
 //! Bounded: at most `1 + REPAIR_ROUNDS` solves per chart and level, `MAX_SPLIT_DEPTH` levels.
+//! `Phases` counts them (`benchmark.py --phases`).
 //! Deterministic: every choice breaks ties by ids.
 
 use super::solve::solve_chart;
@@ -26,7 +31,7 @@ pub fn repair(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], dep
     let t = std::time::Instant::now();
     let mask = face_mask(ctx.mesh.n_faces(), chart);
     // Graph, costs and the scale system's analysis once; each round refactors numerically.
-    let cutter = ChartCutter::new(ctx.mesh, chart, &ctx.options.auto_seams, ctx.avoid);
+    let cutter = ChartCutter::with_cache(ctx.mesh, chart, &ctx.options.auto_seams, ctx.avoid, Some(&ctx.visibility));
     ctx.clock.add(|p| p.plan_cuts += t.elapsed().as_secs_f64());
     let mut seed: Vec<u32> = Vec::new();
     let mut best: Vec<Piece> = Vec::new();
@@ -36,6 +41,11 @@ pub fn repair(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], dep
         }
         best.push(p);
     }
+    // The cones of the best attempt, the cones its crushed regions would add, and whether
+    // rounds add one cone each (after several at once did not help).
+    let mut best_cones: Vec<u32> = Vec::new();
+    let mut best_next: Vec<u32> = seed.clone();
+    let mut single = false;
     for round in 0..=cuts::REPAIR_ROUNDS {
         let t = std::time::Instant::now();
         let cut = cutter.cut(&seed, round);
@@ -68,22 +78,35 @@ pub fn repair(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], dep
             p.repair_rounds += 1;
         });
         let valid = all_valid(ctx, &pieces);
-        let next = pieces
+        let next: Vec<u32> = pieces
             .iter()
             .find(|p| ctx.rule.broken(&p.report).is_some() || !p.report.status.mapped())
-            .and_then(|p| worst_vertex(chart, p, cutter.allowed(), &cut.cones));
+            .map(|p| crushed_vertices(chart, p, cutter.allowed(), &cut.cones, ctx.rule.max_stretch))
+            .unwrap_or_default();
+        // A round that leaves the chart no nearer the rule than the best attempt by a clear
+        // margin is not built on: when it added several cones, the next round goes back to
+        // the best attempt and adds one (at its most crushed region); otherwise the rounds end
+        // (more cones where they did not help cost a whole solve each; the chart is split).
+        let progress = best.is_empty() || clearly_better(ctx, &pieces, &best);
         if best.is_empty() || better(ctx, &pieces, &best) {
             best = pieces;
+            best_cones = cut.cones.clone();
+            best_next = next.clone();
         }
         if valid {
             break;
         }
-        match next {
-            Some(v) => {
-                seed = cut.cones.clone();
-                seed.push(v);
-            }
-            None => break,
+        if progress && !next.is_empty() {
+            seed = cut.cones.clone();
+            seed.extend(next.into_iter().take(if single { 1 } else { CONES_PER_ROUND }));
+        } else if !single && !best_next.is_empty() {
+            // Several cones at once made it worse (typically an outline that now crosses
+            // itself): from here on, one cone per round.
+            single = true;
+            seed = best_cones.clone();
+            seed.push(best_next[0]);
+        } else {
+            break;
         }
     }
     if !all_valid(ctx, &best) && depth < cuts::MAX_SPLIT_DEPTH && chart.faces.len() >= 2 {
@@ -99,10 +122,14 @@ pub fn repair(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], dep
             let mut all: Vec<[u32; 2]> = base_seams.to_vec();
             all.extend_from_slice(&split);
             let halves = build_charts_with(ctx.mesh, &all, Some(&mask), ctx.render);
+            // Each half takes the pipeline's road again (cut, or solve then repair), the halves
+            // in parallel; results in half order, so the outcome does not depend on threads.
+            let lists: Vec<Vec<Piece>> = {
+                use rayon::prelude::*;
+                halves.into_par_iter().map(|h| super::run(ctx, h, &all, depth + 1)).collect()
+            };
             let mut out = Vec::new();
-            for (k, h) in halves.into_iter().enumerate() {
-                // Each half takes the pipeline's road again (cut, or solve then repair).
-                let mut list = super::run(ctx, h, &all, depth + 1);
+            for (k, mut list) in lists.into_iter().enumerate() {
                 if k == 0 {
                     if let Some(p) = list.first_mut() {
                         p.seams.extend_from_slice(&split);
@@ -145,6 +172,113 @@ fn better(ctx: &Context<'_, '_>, a: &[Piece], b: &[Piece]) -> bool {
         == std::cmp::Ordering::Less
 }
 
+/// `a` is better than `b` by more than noise: fewer failures, flips, overlaps or non-disks, or
+/// (with those equal) at most [`PROGRESS`] of `b`'s area beyond the density bound.
+fn clearly_better(ctx: &Context<'_, '_>, a: &[Piece], b: &[Piece]) -> bool {
+    let total = |ps: &[Piece]| {
+        let mut t = (0usize, 0usize, 0usize, 0usize, 0.0f64);
+        for p in ps {
+            let x = ctx.rule.badness(&p.report, p.area);
+            t = (t.0 + x.0, t.1 + x.1, t.2 + x.2, t.3 + x.3, t.4 + x.4);
+        }
+        t
+    };
+    let (x, y) = (total(a), total(b));
+    match (x.0, x.1, x.2, x.3).cmp(&(y.0, y.1, y.2, y.3)) {
+        std::cmp::Ordering::Less => true,
+        std::cmp::Ordering::Greater => false,
+        std::cmp::Ordering::Equal => x.4 <= PROGRESS * y.4,
+    }
+}
+
+/// A repair round must leave at most this share of the best attempt's area beyond the
+/// density bound to earn another round.
+const PROGRESS: f64 = 0.9;
+
+/// Most cones one repair round adds.
+const CONES_PER_ROUND: usize = 4;
+
+/// Cones for the next round: one in each of the largest crushed regions of `piece` (up to
+/// [`CONES_PER_ROUND`]). A region is a vertex-connected set of triangles whose density ratio
+/// is below `1/s` (flipped and zero-area triangles included); its cone goes at the first
+/// allowed corner (not in `exclude`) of its most crushed triangle. Falls back to
+/// [`worst_vertex`] when no triangle is crushed (the piece breaks the rule otherwise).
+fn crushed_vertices(original: &Chart, piece: &Piece, allowed: &[bool], exclude: &[u32], s: f64) -> Vec<u32> {
+    let fallback = || worst_vertex(original, piece, allowed, exclude).into_iter().collect();
+    let Some(uv) = piece.uv.as_ref() else { return fallback() };
+    let chart = piece.chart.as_ref().unwrap_or(original);
+    let to_original = piece_to_original(original, chart);
+    let ratios = crate::metrics::density::density_ratios(&chart.positions, &chart.triangles, uv);
+    let low = 1.0 / s;
+    // Union-find over the vertices of crushed triangles.
+    let mut parent: Vec<u32> = (0..chart.positions.len() as u32).collect();
+    fn find(parent: &mut [u32], mut v: u32) -> u32 {
+        while parent[v as usize] != v {
+            parent[v as usize] = parent[parent[v as usize] as usize];
+            v = parent[v as usize];
+        }
+        v
+    }
+    let crushed: Vec<usize> = (0..chart.triangles.len()).filter(|&t| ratios[t].0 < low).collect();
+    if crushed.is_empty() {
+        return fallback();
+    }
+    for &t in &crushed {
+        let [a, b, c] = chart.triangles[t];
+        for (x, y) in [(a, b), (b, c)] {
+            let (rx, ry) = (find(&mut parent, x), find(&mut parent, y));
+            if rx != ry {
+                parent[rx.max(ry) as usize] = rx.min(ry);
+            }
+        }
+    }
+    // Per region: area, and its triangles by increasing ratio (ties by id).
+    let mut regions: std::collections::BTreeMap<u32, (f64, Vec<(f64, usize)>)> = Default::default();
+    for &t in &crushed {
+        let root = find(&mut parent, chart.triangles[t][0]);
+        let e = regions.entry(root).or_insert((0.0, Vec::new()));
+        e.0 += ratios[t].1;
+        e.1.push((ratios[t].0, t));
+    }
+    let mut regions: Vec<(f64, Vec<(f64, usize)>)> = regions.into_values().collect();
+    regions.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let mut out: Vec<u32> = Vec::new();
+    for (_, mut tris) in regions {
+        if out.len() >= CONES_PER_ROUND {
+            break;
+        }
+        tris.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        'region: for (_, t) in tris {
+            for &v in &chart.triangles[t] {
+                let o = to_original[v as usize];
+                if o != u32::MAX && allowed[o as usize] && !exclude.contains(&o) && !out.contains(&o) {
+                    out.push(o);
+                    break 'region;
+                }
+            }
+        }
+    }
+    if out.is_empty() {
+        return fallback();
+    }
+    out
+}
+
+/// Piece vertex → vertex of `original` through the shared corners (`u32::MAX`: none).
+fn piece_to_original(original: &Chart, chart: &Chart) -> Vec<u32> {
+    let mut corner_to_original = std::collections::HashMap::with_capacity(original.corner_vertex.len());
+    for &(c, v) in &original.corner_vertex {
+        corner_to_original.insert(c, v);
+    }
+    let mut to_original = vec![u32::MAX; chart.positions.len()];
+    for &(c, v) in &chart.corner_vertex {
+        if let Some(&o) = corner_to_original.get(&c) {
+            to_original[v as usize] = o;
+        }
+    }
+    to_original
+}
+
 /// Faces of `chart` as a selection mask over the mesh.
 fn face_mask(n_faces: usize, chart: &Chart) -> Vec<bool> {
     let mut mask = vec![false; n_faces];
@@ -163,17 +297,7 @@ fn worst_vertex(original: &Chart, piece: &Piece, allowed: &[bool], exclude: &[u3
     if chart.triangles.is_empty() {
         return None;
     }
-    // Piece vertex → original vertex through the shared corners.
-    let mut corner_to_original = std::collections::HashMap::with_capacity(original.corner_vertex.len());
-    for &(c, v) in &original.corner_vertex {
-        corner_to_original.insert(c, v);
-    }
-    let mut to_original = vec![u32::MAX; chart.positions.len()];
-    for &(c, v) in &chart.corner_vertex {
-        if let Some(&o) = corner_to_original.get(&c) {
-            to_original[v as usize] = o;
-        }
-    }
+    let to_original = piece_to_original(original, chart);
     let ratios = crate::metrics::density::density_ratios(&chart.positions, &chart.triangles, uv);
     // Crushed triangles first (a flip or zero area, then the smallest ratio): a cone there
     // opens the surface with an angle below 2π. A cone where the density is too high would
