@@ -126,9 +126,10 @@ def unwrap(positions, corner_verts, face_sizes, *, method="abf", seams=None, sel
             32 rays from each vertex against the mesh near the chart.
         symmetry: mirror plane the seams keep, "none" (default), "x", "y", "z" (the plane
             across that axis through the chart's centre) or "auto" (the first principal axis
-            whose plane is a mirror). On a chart that is its own mirror image the cones and
-            cuts are mirrored, so a closed chart's seams map onto themselves; a chart that is
-            not symmetric about the plane is cut as without it.
+            whose plane is a mirror). On a chart that is its own mirror image the cut costs and
+            cones are mirrored, and a closed chart without handles is cut on one half and the
+            cut mirrored, so its seams map onto themselves (a last-resort split is not); a
+            chart that is not symmetric about the plane is cut as without it.
         progress: ``callable(charts_done, charts_total)``, called from the worker threads
             with the GIL held, at most every 0.1 s and once after the last chart; returning
             a false value (``False``, ``0``, ``numpy.False_``; ``None`` goes on) cancels the

@@ -344,8 +344,9 @@ def unwrap(
             vertex against the mesh near the chart).
         symmetry: mirror plane the seams keep: "none" (default), "x", "y", "z" (across that
             axis through the chart's centre) or "auto" (a principal axis). On a chart that is
-            its own mirror image cones and cuts are mirrored, so a closed chart's seams map
-            onto themselves; other charts are cut as without it.
+            its own mirror image cut costs and cones are mirrored, and a closed chart without
+            handles is cut on one half and the cut mirrored, so its seams map onto themselves
+            (a last-resort split is not); other charts are cut as without it.
 
     Raises:
         InputError: wrong shape, dtype or length; a non-finite ``fit_to`` UV.
