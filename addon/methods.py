@@ -5,6 +5,10 @@ To add a method (``abf``, ``arap``, ``slim``, ``mips``, ``scaffold`` …): appen
 :class:`MethodInfo` to :data:`METHODS`; if it takes options the table does not know yet, add
 them to :data:`OPTIONS`.  The operator, the sidebar defaults, the redo panel and the batch
 scripts all read these two tables.
+
+The automatic-seams properties are built from the core's declared options
+(``uvflat.AUTO_SEAM_OPTIONS``, :data:`AUTO_SEAM_SPECS`): their defaults, bounds and choices are
+the core's, only labels, descriptions and display settings are written here.
 """
 
 from __future__ import annotations
@@ -297,38 +301,97 @@ def common_properties() -> dict[str, Any]:
     return props
 
 
+def _import_core():
+    try:
+        import uvflat
+    except ImportError as ex:  # pragma: no cover - depends on the installation
+        raise ImportError(f"uvflat: the uvflat module could not be imported ({ex}); reinstall "
+                          "the extension for this platform") from ex
+    return uvflat
+
+
+# The core's declared automatic-seams options (uvflat.AUTO_SEAM_OPTIONS) by name: the
+# properties below take their defaults, bounds and choices from it.
+AUTO_SEAM_SPECS: dict[str, dict[str, Any]] = {s["name"]: s for s in _import_core().AUTO_SEAM_OPTIONS}
+
+# Options set on the Blender side: avoid_vertices comes from the vertex group named by
+# avoid_group (engine.py), sharp_angle is on only with prefer_sharp.
+BLENDER_SIDE_OPTIONS = ("avoid_vertices",)
+
+# Words for the symmetry choices (the identifiers are the core's names).
+SYMMETRY_ITEMS: dict[str, tuple[str, str]] = {
+    "none": ("None", "No symmetry: each island is cut on its own"),
+    "x": ("X", "Mirror across the plane through the island's centre facing X (left/right "
+               "for a character facing -Y)"),
+    "y": ("Y", "Mirror across the plane through the island's centre facing Y"),
+    "z": ("Z", "Mirror across the plane through the island's centre facing Z"),
+    "auto": ("Auto", "The first of the island's principal axes across which it is its own "
+                     "mirror image"),
+}
+
+
+def _from_spec(name: str, label: str, description: str, **ui) -> Any:
+    """A fresh bpy property for the declared option ``name``: its type, default, bounds and
+    choices come from :data:`AUTO_SEAM_SPECS`; ``ui`` adds display settings and may narrow
+    the bounds (never widen them: checked here)."""
+    spec = AUTO_SEAM_SPECS[name]
+    kind = spec["type"]
+    # an option that is off by default (sharp_angle) gets the value it starts from when on
+    default = ui.pop("default") if spec["default"] is None else spec["default"]
+    if kind == "bool":
+        return BoolProperty(name=label, description=description, default=default, **ui)
+    if kind == "choice":
+        return EnumProperty(name=label, description=description, default=default,
+                            items=tuple((c, *SYMMETRY_ITEMS[c]) if name == "symmetry" else
+                                        (c, c.title(), "") for c in spec["choices"]), **ui)
+    low = ui.pop("min", spec["min"])
+    high = ui.pop("max", spec["max"])
+    if spec["min"] is not None:
+        assert low > spec["min"] or (low == spec["min"] and not spec["min_exclusive"]), name
+    if spec["max"] is not None:
+        assert high < spec["max"] or (high == spec["max"] and not spec["max_exclusive"]), name
+    bounds = {k: v for k, v in (("min", low), ("max", high)) if v is not None}
+    if kind == "int":
+        return IntProperty(name=label, description=description, default=default, **bounds, **ui)
+    if kind == "float":
+        return FloatProperty(name=label, description=description, default=default, **bounds,
+                             **ui)
+    raise ValueError(f"{name}: no property for options of type {kind}")
+
+
 def auto_seam_properties() -> dict[str, Any]:
     """Fresh bpy properties of automatic seams (closed and higher-genus charts)."""
     return {
-        "auto_seams": BoolProperty(
-            name="Auto Seams",
-            description="Cut closed charts and charts with handles open through a few cone "
-                        "singularities, so every selected face unwraps. Your own seams are "
-                        "kept and used first",
-            default=True,
-        ),
-        "max_stretch": FloatProperty(
-            name="Max Stretch",
-            description="How much texel density may vary inside one island before another "
-                        "cone or cut is added",
-            default=2.0, min=1.05, max=100.0, soft_max=8.0, precision=2, step=10,
-        ),
-        "max_cones": IntProperty(
-            name="Max Cones",
-            description="Most cone singularities per chart (a closed sphere always gets 2)",
-            default=8, min=0, max=1000, soft_max=64,
-        ),
+        "auto_seams": _from_spec(
+            "auto_seams", "Auto Seams",
+            "Cut closed charts and charts with handles open through a few cone singularities, "
+            "so every selected face unwraps. Your own seams are kept and used first"),
+        "max_stretch": _from_spec(
+            "max_stretch", "Max Stretch",
+            "How much texel density may vary inside one island before another cone or cut is "
+            "added", min=1.05, max=100.0, soft_max=8.0, precision=2, step=10),
+        "max_cones": _from_spec(
+            "max_cones", "Max Cones",
+            "Most cone singularities per chart (a closed sphere always gets 2)", soft_max=64),
         "prefer_sharp": BoolProperty(
             name="Prefer Sharp Edges",
             description="Let new seams run along edges sharper than Sharp Angle",
-            default=False,
+            default=AUTO_SEAM_SPECS["sharp_angle"]["default"] is not None,
         ),
-        "sharp_angle": FloatProperty(
-            name="Sharp Angle",
-            description="Dihedral angle from which an edge counts as sharp",
-            default=math.radians(30.0), min=math.radians(1.0), max=math.radians(179.0),
-            subtype="ANGLE",
-        ),
+        # the angle Prefer Sharp Edges starts from (the core's default is no preference)
+        "sharp_angle": _from_spec(
+            "sharp_angle", "Sharp Angle", "Dihedral angle from which an edge counts as sharp",
+            min=math.radians(1.0), max=math.radians(179.0), subtype="ANGLE",
+            default=math.radians(30.0)),
+        "symmetry": _from_spec(
+            "symmetry", "Symmetry",
+            "Mirror plane the new seams keep: on an island that is its own mirror image the "
+            "cuts are mirrored, so both halves unwrap alike"),
+        "visibility_weight": _from_spec(
+            "visibility_weight", "Seam Visibility",
+            "How much dearer a seam is on exposed surface than in hidden places (ambient "
+            "occlusion): higher hides seams more, 0 ignores visibility",
+            soft_max=4.0, precision=2, step=10),
         "avoid_group": StringProperty(
             name="Avoid Seams",
             description="Vertex group where new seams must not go (e.g. the face); empty for "
@@ -354,13 +417,18 @@ AUTO_SEAM_NAMES: tuple[str, ...] = tuple(auto_seam_properties().keys())
 
 
 def auto_seam_options(props) -> dict[str, Any]:
-    """The automatic-seams keywords of ``uvflat.unwrap`` from the properties in ``props``."""
-    return {
-        "auto_seams": bool(props.auto_seams),
-        "max_stretch": float(props.max_stretch),
-        "max_cones": int(props.max_cones),
-        "sharp_angle": float(props.sharp_angle) if props.prefer_sharp else None,
-    }
+    """The automatic-seams keywords of ``uvflat.unwrap`` from the properties in ``props``:
+    every declared option but those set on the Blender side (:data:`BLENDER_SIDE_OPTIONS`)."""
+    out: dict[str, Any] = {}
+    for name, spec in AUTO_SEAM_SPECS.items():
+        if name in BLENDER_SIDE_OPTIONS:
+            continue
+        if name == "sharp_angle":
+            out[name] = float(props.sharp_angle) if props.prefer_sharp else None
+            continue
+        cast = {"bool": bool, "int": int, "float": float, "choice": str}[spec["type"]]
+        out[name] = cast(getattr(props, name))
+    return out
 
 
 SETTING_NAMES: tuple[str, ...] = tuple(common_properties().keys())
@@ -408,6 +476,8 @@ def draw_settings(layout, props) -> None:
     sub = col.column()
     sub.active = props.auto_seams and props.prefer_sharp
     sub.prop(props, "sharp_angle")
+    col.prop(props, "symmetry")
+    col.prop(props, "visibility_weight")
     obj = getattr(bpy.context, "active_object", None)
     if obj is not None and obj.type == "MESH":
         col.prop_search(props, "avoid_group", obj, "vertex_groups")

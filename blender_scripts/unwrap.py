@@ -77,6 +77,61 @@ class _Parser(argparse.ArgumentParser):
         raise UsageError(message)
 
 
+# Declared automatic-seams options whose flags are written by hand: avoid_vertices comes from
+# a vertex group (--avoid-group), sharp_angle is given in degrees (--sharp-angle).
+_AUTO_SEAM_FLAGS_BY_HAND = ("avoid_vertices", "sharp_angle")
+
+
+_METAVARS = {"max_stretch": "S", "max_cones": "N", "visibility_weight": "W"}
+
+
+def auto_seam_specs():
+    """The core's declared automatic-seams options (``uvflat.AUTO_SEAM_OPTIONS``) by name."""
+    import uvflat
+
+    return {s["name"]: s for s in uvflat.AUTO_SEAM_OPTIONS}
+
+
+def auto_seam_flag(name: str) -> str:
+    return "--" + name.replace("_", "-")
+
+
+def _add_auto_seam_flags(parser):
+    """A flag for every declared automatic-seams option but those written by hand, with the
+    core's default and choices (``--auto-seams``, ``--max-stretch``, ``--max-cones``,
+    ``--visibility-weight``, ``--symmetry``)."""
+    for name, spec in auto_seam_specs().items():
+        if name in _AUTO_SEAM_FLAGS_BY_HAND:
+            continue
+        # (argparse %-formats help texts)
+        flag, doc = auto_seam_flag(name), "automatic seams: " + spec["doc"].replace("%", "%%")
+        if spec["type"] == "bool":
+            parser.add_argument(flag, action=argparse.BooleanOptionalAction,
+                                default=spec["default"], help=doc)
+        elif spec["type"] == "choice":
+            parser.add_argument(flag, choices=spec["choices"], default=spec["default"], help=doc)
+        elif spec["type"] in ("int", "float"):
+            parser.add_argument(flag, type=int if spec["type"] == "int" else float,
+                                default=spec["default"], metavar=_METAVARS.get(name), help=doc)
+        else:  # a new kind of option needs its flag written by hand
+            raise RuntimeError(f"automatic-seams option {name} of type {spec['type']} has no flag")
+
+
+def _check_declared(flag: str, value, spec) -> None:
+    """Raise UsageError when ``value`` is outside the declared option's domain."""
+    if spec["type"] == "float" and not math.isfinite(value):
+        raise UsageError(f"{flag} {value}: must be a finite number")
+    low, high = spec["min"], spec["max"]
+    if (low is not None and (value < low or value == low and spec["min_exclusive"])
+            or high is not None and (value > high or value == high and spec["max_exclusive"])):
+        bounds = [f"{'greater than' if spec['min_exclusive'] else 'at least'} {low:g}"
+                  if low is not None else "",
+                  f"{'less than' if spec['max_exclusive'] else 'at most'} {high:g}"
+                  if high is not None else ""]
+        raise UsageError(f"{flag} {value}: out of range (must be "
+                         f"{' and '.join(b for b in bounds if b)})")
+
+
 def parse_args(argv):
     """Parsed arguments; ``args.batch`` tells a batch (several inputs, a folder or a glob)
     from a single file, whose ``args.inputs`` are then the expanded input files."""
@@ -118,14 +173,7 @@ def parse_args(argv):
     parser.add_argument("--uv-name", default=None,
                         help="write into a new UV map of this name (default: the active one); "
                              "it becomes the active and the render UV map")
-    parser.add_argument("--auto-seams", action=argparse.BooleanOptionalAction, default=True,
-                        help="cut closed and higher-genus charts open through cone "
-                             "singularities (a closed scan unwraps with no seams marked)")
-    parser.add_argument("--max-stretch", type=float, default=2.0,
-                        help="automatic seams: how much the length scale may vary inside one "
-                             "island before another cone or cut is added (> 1)")
-    parser.add_argument("--max-cones", type=int, default=8,
-                        help="automatic seams: most cone singularities per chart")
+    _add_auto_seam_flags(parser)
     parser.add_argument("--sharp-angle", type=float, default=None,
                         help="automatic seams: prefer edges whose dihedral angle is at least "
                              "this many degrees")
@@ -330,10 +378,11 @@ def check_args(args, methods, core_methods):
     if not math.isfinite(args.margin):
         raise UsageError(f"--margin {args.margin}: must be a finite number")
     _check_range("--margin", args.margin, defaults["margin"])
-    if not (math.isfinite(args.max_stretch) and args.max_stretch > 1.0):
-        raise UsageError(f"--max-stretch {args.max_stretch}: must be a finite number greater than 1")
-    if not 0 <= args.max_cones <= 1000:
-        raise UsageError(f"--max-cones {args.max_cones}: must be between 0 and 1000")
+    specs = auto_seam_specs()
+    auto = {name: getattr(args, name) for name in specs if name not in _AUTO_SEAM_FLAGS_BY_HAND}
+    for name, value in auto.items():
+        if specs[name]["type"] in ("int", "float"):
+            _check_declared(auto_seam_flag(name), value, specs[name])
     if args.sharp_angle is not None and not (math.isfinite(args.sharp_angle)
                                              and 0.0 < args.sharp_angle < 180.0):
         raise UsageError(f"--sharp-angle {args.sharp_angle}: must be between 0 and 180 degrees")
@@ -350,10 +399,8 @@ def check_args(args, methods, core_methods):
         raise UsageError(f"--avoid-group {args.avoid_group!r} steers automatic seams: it "
                          "contradicts --no-auto-seams")
     # automatic seams travel with the packing properties to the operator
-    pack_props.update(auto_seams=args.auto_seams, max_stretch=args.max_stretch,
-                      max_cones=args.max_cones, mark_seams=args.mark_seams,
-                      avoid_group=args.avoid_group, prefer_sharp=args.sharp_angle is not None,
-                      seams_only=args.seams_only)
+    pack_props.update(auto, mark_seams=args.mark_seams, avoid_group=args.avoid_group,
+                      prefer_sharp=args.sharp_angle is not None, seams_only=args.seams_only)
     if args.sharp_angle is not None:
         pack_props["sharp_angle"] = math.radians(args.sharp_angle)
     return method_props, pack_props

@@ -188,3 +188,94 @@ def test_mark_seams_only_marks_the_planned_seams_and_writes_no_uv(ext, scene):
     result, summary = unwrap(ext, [obj], method="abf")
     assert summary.seams_added == 0
     assert np.asarray(summary.results[obj.name].face_solved).all()
+
+
+# ---------------------------------------------------------------------------------------------
+# The options declared by the core (uvflat.AUTO_SEAM_OPTIONS): Symmetry and Seam Visibility
+
+
+def test_auto_seam_properties_follow_the_core_table(ext, scene):
+    """Every automatic-seams property has the declared default, bounds within the declared
+    domain and the declared choices; the keywords the operator hands to the core from default
+    properties are the declared defaults."""
+    from types import SimpleNamespace
+
+    import uvflat
+
+    props = ext.methods.auto_seam_properties()
+    declared = {s["name"]: s for s in uvflat.AUTO_SEAM_OPTIONS}
+    defaults = SimpleNamespace(**{k: p.keywords["default"] for k, p in props.items()})
+    assert ext.methods.auto_seam_options(defaults) == {
+        name: s["default"] for name, s in declared.items()
+        if name not in ext.methods.BLENDER_SIDE_OPTIONS}
+    assert {"symmetry", "visibility_weight"} <= set(props)
+    for name, s in declared.items():
+        if name in ext.methods.BLENDER_SIDE_OPTIONS:
+            continue
+        kw = props[name].keywords
+        if s["default"] is not None:
+            assert kw["default"] == s["default"], name
+        if s["type"] == "choice":
+            assert tuple(i[0] for i in kw["items"]) == s["choices"], name
+        if s["type"] in ("int", "float"):
+            if s["min"] is not None:
+                assert kw["min"] > s["min"] or (kw["min"] == s["min"] and not s["min_exclusive"])
+            if s["max"] is not None:
+                assert kw["max"] < s["max"] or (kw["max"] == s["max"] and not s["max_exclusive"])
+    # the registered operator and the sidebar defaults carry the two new settings
+    rna = bpy.ops.uv.uvflat_unwrap.get_rna_type().properties
+    assert rna["symmetry"].default == "none"
+    assert {i.identifier for i in rna["symmetry"].enum_items} == set(declared["symmetry"]["choices"])
+    assert rna["visibility_weight"].default == declared["visibility_weight"]["default"]
+    assert (rna["visibility_weight"].hard_min, rna["visibility_weight"].hard_max) == (0.0, 100.0)
+    assert scene.uvflat.symmetry == "none" and scene.uvflat.visibility_weight == 1.0
+    # the redo panel and the sidebar show them with the other automatic-seams settings
+    from test_addon import _PanelLayout
+
+    layout = _PanelLayout()
+    ext.methods.draw_settings(layout, scene.uvflat)
+    assert {"auto_seams", "max_stretch", "max_cones", "symmetry", "visibility_weight",
+            "avoid_group"} <= set(layout.props)
+
+
+def _lopsided_sphere(name="Lopsided"):
+    """A closed UV sphere bent so that its only mirror plane is x = 0."""
+    obj = _sphere(name)
+    me = obj.data
+    co = np.empty(3 * len(me.vertices))
+    me.vertices.foreach_get("co", co)
+    x, y, z = co.reshape(-1, 3).T
+    bent = np.column_stack([1.3 * x, y + 0.4 * z * z, 0.9 * z + 0.25 * y * y + 0.2 * y])
+    me.vertices.foreach_set("co", bent.ravel())
+    me.update()
+    return obj
+
+
+def test_symmetry_marks_mirrored_seams(ext, scene):
+    """Symmetry X through the operator: the marked seams map onto themselves under the mirror
+    across x = 0, every island keeps the atlas rule; Mark Seams Only passes Symmetry and Seam
+    Visibility on too (the plan of uvflat.plan_seams with them)."""
+    import uvflat
+    from test_auto_seams import mirror_of, mirrored
+
+    obj = _lopsided_sphere()
+    before = read(ext, obj)
+    image = mirror_of(before.positions, axis=0)
+    result, summary = unwrap(ext, [obj], method="abf", symmetry="x")
+    assert result == {"FINISHED"} and not summary.failed, summary.line()
+    after = read(ext, obj)
+    marked = {tuple(sorted(map(int, s))) for s in after.seams}
+    assert marked == {tuple(map(int, s)) for s in summary.results[obj.name].new_seams}
+    assert len(marked) > 0 and mirrored(marked, image) == marked
+    m, outside = _islands_density_outside(after, 2.0)
+    assert m.flips == 0 and m.overlapping_charts == 0 and max(outside) <= 0.05 + 1e-9
+
+    obj = _lopsided_sphere("Planned")
+    tris = ext.mesh_io.read_loop_triangles(obj.data)
+    result, summary = unwrap(ext, [obj], method="abf", seams_only=True, symmetry="x",
+                             visibility_weight=0.0)
+    assert result == {"FINISHED"}
+    marked = {tuple(sorted(map(int, s))) for s in read(ext, obj).seams}
+    planned = uvflat.plan_seams(before.positions, before.corner_verts, before.face_sizes,
+                                method="abf", triangles=tris, symmetry="x", visibility_weight=0.0)
+    assert marked == {tuple(map(int, s)) for s in planned} and mirrored(marked, image) == marked

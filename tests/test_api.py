@@ -1166,7 +1166,7 @@ def test_method_options_are_declared_for_every_method_and_accepted():
     for method, specs in uvflat.METHOD_OPTIONS.items():
         for spec in specs:
             assert set(spec) == {"name", "type", "default", "min", "max", "min_exclusive",
-                                 "choices", "doc"} and spec["doc"]
+                                 "max_exclusive", "choices", "doc"} and spec["doc"]
             if spec["type"] == "vertex_values":
                 continue
             # the declared default is accepted, and a value outside the domain is refused

@@ -146,3 +146,179 @@ def test_shared_closed_meshes_unwrap_completely(name, genus):
     assert all(c.flips == 0 and not c.overlap for c in r.charts if c.status == "solved")
     m = uvflat.metrics(pos, cv, fs, r.uv)
     assert m.flips == 0
+
+
+# ---------------------------------------------------------------------------------------------
+# One contract for the automatic-seams options: AUTO_SEAM_OPTIONS
+
+# unwrap's keywords that are not automatic-seams options
+_NOT_AUTO_SEAMS = {"method", "seams", "selected", "pins", "pin_uvs", "fit_to", "triangles",
+                   "progress"}
+
+
+def _stub_keywords(function):
+    """Keyword-only arguments of ``function`` in the .pyi stub, with their defaults (parsed,
+    not imported)."""
+    import ast
+    from pathlib import Path
+
+    tree = ast.parse(Path(uvflat.__file__).with_name("__init__.pyi").read_text())
+    for node in tree.body:
+        if isinstance(node, ast.FunctionDef) and node.name == function:
+            return {a.arg: ast.literal_eval(d) for a, d in zip(node.args.kwonlyargs,
+                                                               node.args.kw_defaults)}
+    raise AssertionError(f"the stub lost {function}")
+
+
+def test_auto_seam_options_are_declared_like_method_options():
+    names = [s["name"] for s in uvflat.AUTO_SEAM_OPTIONS]
+    assert names == ["auto_seams", "max_stretch", "max_cones", "avoid_vertices", "sharp_angle",
+                     "visibility_weight", "symmetry"]
+    method_keys = {k for specs in uvflat.METHOD_OPTIONS.values() for s in specs for k in s}
+    for s in uvflat.AUTO_SEAM_OPTIONS:
+        assert set(s) == method_keys and s["doc"], s
+    by_name = {s["name"]: s for s in uvflat.AUTO_SEAM_OPTIONS}
+    assert by_name["symmetry"]["choices"] == ("none", "x", "y", "z", "auto")
+    assert by_name["symmetry"]["default"] == "none"
+    assert by_name["visibility_weight"]["default"] == 1.0
+    assert (by_name["visibility_weight"]["min"], by_name["visibility_weight"]["max"]) == (0.0, 100.0)
+
+
+@pytest.mark.parametrize("function", ["unwrap", "plan_seams"])
+def test_auto_seam_options_are_the_keywords_of_unwrap(function):
+    """The declared options are exactly the automatic-seams keywords of the Python function, of
+    the stub and of the native function, with the declared defaults, and its help names
+    each of them."""
+    import inspect
+
+    declared = {s["name"]: s["default"] for s in uvflat.AUTO_SEAM_OPTIONS}
+    signature = inspect.signature(getattr(uvflat, function)).parameters
+    python = {n: p.default for n, p in signature.items()
+              if p.kind is inspect.Parameter.KEYWORD_ONLY and n not in _NOT_AUTO_SEAMS}
+    assert python == declared
+    stub = {n: d for n, d in _stub_keywords(function).items() if n not in _NOT_AUTO_SEAMS}
+    assert stub == declared
+    native = inspect.signature(uvflat._uvflat.unwrap).parameters
+    assert set(declared) <= set(native)
+    assert set(native) - set(declared) - _NOT_AUTO_SEAMS == {"positions", "corner_verts",
+                                                              "face_sizes", "options"}
+    if function == "unwrap":
+        for name in declared:
+            assert f"{name}:" in uvflat.unwrap.__doc__, f"help(uvflat.unwrap) lacks {name}"
+
+
+def test_auto_seam_declared_values_are_accepted_and_bounds_refused():
+    pos, cv, fs = cube()
+    for s in uvflat.AUTO_SEAM_OPTIONS:
+        if s["type"] == "vertices" or s["default"] is None:
+            continue
+        uvflat.unwrap(pos, cv, fs, method="lscm", **{s["name"]: s["default"]})
+        bad = {"bool": 1, "int": s["max"] + 1 if s["max"] is not None else -1,
+               "float": s["max"] * 2 if s["max"] is not None else s["min"],
+               "choice": "no such choice"}[s["type"]]
+        with pytest.raises(uvflat.OptionError) as ei:
+            uvflat.unwrap(pos, cv, fs, method="lscm", **{s["name"]: bad})
+        assert ei.value.option == s["name"], (s, str(ei.value))
+
+
+@pytest.mark.parametrize(
+    "kwargs, option",
+    [
+        ({"symmetry": "w"}, "symmetry"),
+        ({"symmetry": "X"}, "symmetry"),
+        ({"symmetry": 3}, "symmetry"),
+        ({"visibility_weight": -1}, "visibility_weight"),
+        ({"visibility_weight": 101.0}, "visibility_weight"),
+        ({"visibility_weight": float("nan")}, "visibility_weight"),
+        ({"visibility_weight": "a"}, "visibility_weight"),
+        ({"visibility_weight": True}, "visibility_weight"),
+    ],
+)
+@pytest.mark.parametrize("function", [uvflat.unwrap, uvflat.plan_seams])
+def test_bad_seam_symmetry_and_visibility_are_option_errors(kwargs, option, function):
+    pos, cv, fs = cube()
+    with pytest.raises(uvflat.OptionError) as e:
+        function(pos, cv, fs, **kwargs)
+    assert e.value.option == option, str(e.value)
+    assert option in str(e.value)
+
+
+def mirror_of(positions, axis=0):
+    """The vertex each vertex is the mirror image of, across the plane through the vertices'
+    centroid facing ``axis`` (matched by nearest reflected position; asserts a match)."""
+    pos = np.asarray(positions, dtype=float)
+    reflected = pos.copy()
+    reflected[:, axis] = 2 * pos[:, axis].mean() - reflected[:, axis]
+    tol = 1e-5 * np.linalg.norm(np.ptp(pos, axis=0))
+    image = np.empty(len(pos), dtype=np.int64)
+    for start in range(0, len(pos), 256):
+        d = np.linalg.norm(reflected[start:start + 256, None, :] - pos[None, :, :], axis=2)
+        image[start:start + 256] = d.argmin(axis=1)
+        assert d.min(axis=1).max() < tol, "the mesh is not mirror-symmetric"
+    return image
+
+
+def mirrored(seams, image):
+    return {tuple(sorted((int(image[a]), int(image[b])))) for a, b in seams}
+
+
+def assert_atlas_rule(pos, cv, fs, r):
+    """Every face solved; every island a disk without flips or a crossing outline, with at
+    most 5% of its area outside [1/2, 2] of its texel density."""
+    assert r.face_solved.all(), [c.reason for c in r.charts]
+    for c in r.charts:
+        assert c.kind == "disk" and c.status == "solved", c
+        assert c.flips == 0 and not c.overlap and c.density_outside <= 0.05 + 1e-9, c
+    m = uvflat.metrics(pos, cv, fs, r.uv)
+    assert m.flips == 0 and m.overlapping_charts == 0
+
+
+def lopsided_sphere():
+    """A closed UV sphere bent so that its only mirror plane is x = 0."""
+    pos, cv, fs = uv_sphere(24, 12)
+    x, y, z = pos[:, 0], pos[:, 1], pos[:, 2]
+    bent = np.column_stack([1.3 * x, y + 0.4 * z * z, 0.9 * z + 0.25 * y * y + 0.2 * y])
+    return bent, cv, fs
+
+
+def test_symmetry_x_mirrors_the_seams_of_a_symmetric_closed_mesh():
+    pos, cv, fs = lopsided_sphere()
+    image = mirror_of(pos, axis=0)
+    assert not np.array_equal(image, np.arange(len(pos)))
+    r = uvflat.unwrap(pos, cv, fs, method="abf", symmetry="x")
+    assert_atlas_rule(pos, cv, fs, r)
+    seams = {tuple(map(int, s)) for s in r.new_seams}
+    assert len(seams) > 0
+    assert mirrored(seams, image) == seams, "the seams do not map onto themselves"
+    # plan_seams passes the option on: the same seams
+    planned = uvflat.plan_seams(pos, cv, fs, method="abf", symmetry="x")
+    assert {tuple(map(int, s)) for s in planned} == seams
+    # a plane the mesh is not symmetric about changes nothing
+    plain = uvflat.plan_seams(pos, cv, fs, method="abf")
+    assert np.array_equal(uvflat.plan_seams(pos, cv, fs, method="abf", symmetry="z"), plain)
+
+
+def dented_sphere(n_lon=48, n_lat=24, level=0.2, depth=1.6):
+    """A closed UV sphere whose cap above ``level`` is pushed inside: a cup-shaped pocket,
+    mostly hidden from view. Returns the mesh and the mask of the pocket's vertices."""
+    pos, cv, fs = uv_sphere(n_lon, n_lat)
+    pocket = pos[:, 2] > level
+    pos[pocket, 2] = level - (pos[pocket, 2] - level) * depth
+    return pos, cv, fs, pocket
+
+
+def test_visibility_weight_moves_seams_into_hidden_places_and_keeps_the_rule():
+    pos, cv, fs, pocket = dented_sphere()
+    share = {}
+    for w in (0.0, 1.0, 100.0):
+        r = uvflat.unwrap(pos, cv, fs, method="abf", visibility_weight=w)
+        assert_atlas_rule(pos, cv, fs, r)
+        s = np.asarray(r.new_seams, dtype=np.int64)
+        length = np.linalg.norm(pos[s[:, 0]] - pos[s[:, 1]], axis=1)
+        share[w] = length[pocket[s].all(axis=1)].sum() / length.sum()
+        if w == 1.0:  # the declared default
+            default = {tuple(map(int, x)) for x in uvflat.plan_seams(pos, cv, fs, method="abf")}
+            assert {tuple(map(int, x)) for x in s} == default
+    # weighing exposure puts more of the seams inside the pocket than ignoring it
+    assert share[1.0] > share[0.0] + 0.05, share
+    assert share[100.0] > share[0.0] + 0.05, share

@@ -572,3 +572,93 @@ def test_seams_only_contradictions_are_one_line(tmp_path, extra, needle):
     assert r.returncode == 1 and needle in r.stderr + r.stdout and "Traceback" not in r.stderr
     r = _run(src, tmp_path / "out.obj", "--seams-only")
     assert r.returncode == 1 and ".blend" in r.stderr + r.stdout and "Traceback" not in r.stderr
+
+
+# ---------------------------------------------------------------------------------------------
+# Automatic-seams flags from the core's table (uvflat.AUTO_SEAM_OPTIONS)
+
+
+def _script():
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("uvflat_unwrap_script", SCRIPT)
+    script = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(script)
+    return script
+
+
+def test_batch_auto_seam_flags_follow_the_core_table():
+    """A flag for every declared automatic-seams option (but the two given another way), with
+    the declared default and choices."""
+    import uvflat
+
+    script = _script()
+    args = script.parse_args(["in.obj", "out.obj"])
+    by_dest = {a.dest: a for a in args.parser._actions}
+    by_hand = {"avoid_vertices": "--avoid-group", "sharp_angle": "--sharp-angle"}
+    for s in uvflat.AUTO_SEAM_OPTIONS:
+        if s["name"] in by_hand:
+            assert by_hand[s["name"]] in by_dest[by_hand[s["name"]][2:].replace("-", "_")].option_strings
+            continue
+        action = by_dest[s["name"]]
+        assert "--" + s["name"].replace("_", "-") in action.option_strings, s["name"]
+        assert action.default == s["default"] == getattr(args, s["name"]), s["name"]
+        if s["type"] == "choice":
+            assert tuple(action.choices) == s["choices"]
+    assert by_dest["symmetry"].option_strings == ["--symmetry"]
+    assert by_dest["visibility_weight"].option_strings == ["--visibility-weight"]
+    text = args.parser.format_help()
+    assert "--symmetry" in text and "--visibility-weight" in text
+    args = script.parse_args(["in.obj", "out.obj", "--symmetry", "auto", "--visibility-weight", "3"])
+    assert (args.symmetry, args.visibility_weight) == ("auto", 3.0)
+
+
+@pytest.mark.parametrize("args,needle", [
+    (["--symmetry", "w"], "--symmetry"),
+    (["--visibility-weight", "-1"], "--visibility-weight"),
+    (["--visibility-weight", "101"], "--visibility-weight"),
+    (["--visibility-weight", "nan"], "--visibility-weight"),
+    (["--visibility-weight", "a"], "--visibility-weight"),
+])
+def test_batch_refuses_bad_symmetry_and_visibility_in_one_line(tmp_path, args, needle):
+    src, out = tmp_path / "box.obj", tmp_path / "out.obj"
+    _closed_box_obj(src)
+    r = _run(src, out, *args)
+    _one_line_error(r, needle)
+    assert sorted(tmp_path.iterdir()) == [src]
+
+
+def test_batch_symmetry_marks_mirrored_seams(tmp_path):
+    """--seams-only --symmetry x: the .blend carries the seams uvflat.plan_seams(symmetry="x")
+    plans, and they map onto themselves under the mirror across the box's middle."""
+    import uvflat
+    from test_auto_seams import mirror_of, mirrored
+
+    src, out = tmp_path / "box.obj", tmp_path / "out.blend"
+    _closed_box_obj(src)
+    r = _run(src, out, "--method", "abf", "--seams-only", "--symmetry", "x",
+             "--visibility-weight", "2")
+    assert r.returncode == 0, r.stdout + r.stderr
+    probe = (
+        "import bpy, json\n"
+        f"bpy.ops.wm.open_mainfile(filepath={str(out)!r})\n"
+        "me = [o for o in bpy.data.objects if o.type == 'MESH'][0].data\n"
+        "print(json.dumps({'seams': sorted(sorted(e.vertices[:]) for e in me.edges if e.use_seam),\n"
+        "  'positions': [v.co[:] for v in me.vertices],\n"
+        "  'corner_verts': [l.vertex_index for l in me.loops],\n"
+        "  'face_sizes': [p.loop_total for p in me.polygons]}))\n"
+    )
+    p = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    data = json.loads(p.stdout.strip().splitlines()[-1])
+    pos = np.array(data["positions"])
+    seams = {tuple(s) for s in data["seams"]}
+    assert len(seams) > 0 and mirrored(seams, mirror_of(pos, axis=0)) == seams
+    planned = uvflat.plan_seams(pos, np.array(data["corner_verts"]), np.array(data["face_sizes"]),
+                                method="abf", symmetry="x", visibility_weight=2.0)
+    assert seams == {tuple(map(int, s)) for s in planned}
+    # and a full unwrap with it writes UVs for every face
+    r = _run(src, tmp_path / "full.obj", "--method", "abf", "--symmetry", "x")
+    assert r.returncode == 0, r.stdout + r.stderr
+    faces = [ln for ln in (tmp_path / "full.obj").read_text().splitlines() if ln.startswith("f ")]
+    assert len(faces) == 96 and all("/" in f for f in faces)

@@ -30,7 +30,7 @@ pub mod pipeline;
 mod unwrap;
 pub mod validate;
 
-pub use cuts::AutoSeamOptions;
+pub use cuts::{auto_seam_options, AutoSeamOptions, Symmetry, UnknownSymmetry};
 pub use error::{Result, UvError};
 pub use factor_timing::factorization_seconds;
 pub use methods::{method_names, BoundaryShape, Method, OptionValue, SpectralOptions};

@@ -25,8 +25,9 @@ use std::time::{Duration, Instant};
 use numpy::{PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyString, PyTuple};
+use uvflat_core::methods::options::OptionKind;
 use uvflat_core::methods::{method_names, Method, OptionValue};
-use uvflat_core::{AutoSeamOptions, Fit, MeshInput, Progress, UnwrapOptions, UvError};
+use uvflat_core::{auto_seam_options, AutoSeamOptions, Fit, MeshInput, Progress, UnwrapOptions, UvError};
 
 use convert::{floats, indices, Layout};
 use errors::{attrs, error, internal_error, map_uv_error, Kind};
@@ -215,54 +216,53 @@ fn option_type_error(py: Python<'_>, name: &str, expected: &str, value: &Bound<'
     error(py, Kind::Option, format!("option {name}: {reason}"), attrs![py; "option" => name.to_string(), "reason" => reason])
 }
 
-/// The automatic-seams keywords of `unwrap` (None means the default), type-checked here and
-/// range-checked by the core.
-fn read_auto_seams(
-    py: Python<'_>,
-    enabled: Option<&Bound<'_, PyAny>>,
-    max_stretch: Option<&Bound<'_, PyAny>>,
-    max_cones: Option<&Bound<'_, PyAny>>,
-    avoid_vertices: Option<&Bound<'_, PyAny>>,
-    sharp_angle: Option<&Bound<'_, PyAny>>,
-    n_vertices: usize,
-) -> PyResult<AutoSeamOptions> {
+/// The automatic-seams keywords of `unwrap` as `(name, value)`, in the order of
+/// `uvflat.AUTO_SEAM_OPTIONS` (None means the default): each value is type-checked here by
+/// its declared kind (an `OptionError` naming it), parsed by the core (negative `max_cones`,
+/// unknown `symmetry`) and range-checked by the core's validation in `unwrap`.
+fn read_auto_seams(py: Python<'_>, given: &[(&str, Option<&Bound<'_, PyAny>>)], n_vertices: usize) -> PyResult<AutoSeamOptions> {
     let mut o = AutoSeamOptions::default();
-    if let Some(v) = enabled.filter(|v| !v.is_none()) {
-        o.enabled = if v.is_instance_of::<PyBool>() {
-            v.extract()?
-        } else {
-            return Err(option_type_error(py, "auto_seams", "a bool", v));
+    for spec in auto_seam_options() {
+        let Some(&(name, value)) = given.iter().find(|(n, _)| *n == spec.name) else {
+            // a declared option `unwrap` does not take: a bug, caught by the tests
+            return Err(error(py, Kind::Uvflat, format!("unwrap takes no keyword {}", spec.name), attrs![py;]));
         };
-    }
-    let number = |name: &str, v: &Bound<'_, PyAny>| -> PyResult<f64> {
-        if v.is_instance_of::<PyBool>() || v.is_instance_of::<PyString>() {
-            return Err(option_type_error(py, name, "a number", v));
-        }
-        v.extract::<f64>().map_err(|_| option_type_error(py, name, "a number", v))
-    };
-    if let Some(v) = max_stretch.filter(|v| !v.is_none()) {
-        o.max_stretch = number("max_stretch", v)?;
-    }
-    if let Some(v) = sharp_angle.filter(|v| !v.is_none()) {
-        o.sharp_angle = Some(number("sharp_angle", v)?);
-    }
-    if let Some(v) = max_cones.filter(|v| !v.is_none()) {
-        if v.is_instance_of::<PyBool>() {
-            return Err(option_type_error(py, "max_cones", "a non-negative integer", v));
-        }
-        let k: i64 = v.extract().map_err(|_| option_type_error(py, "max_cones", "a non-negative integer", v))?;
-        if k < 0 {
-            let reason = format!("must be a non-negative integer, got {k}");
-            return Err(error(py, Kind::Option, format!("option max_cones: {reason}"), attrs![py; "option" => "max_cones", "reason" => reason]));
-        }
-        o.max_cones = k.min(u32::MAX as i64) as usize;
-    }
-    if let Some(v) = avoid_vertices.filter(|v| !v.is_none()) {
-        let (idx, _) = indices(v, "avoid_vertices", Layout::Vector("K"), |entry, vertex| {
-            let reason = format!("entry {entry}: vertex index {vertex} out of range (mesh has {n_vertices} vertices)");
-            error(py, Kind::Option, format!("option avoid_vertices: {reason}"), attrs![py; "option" => "avoid_vertices", "reason" => reason])
-        })?;
-        o.avoid_vertices = idx;
+        let Some(v) = value.filter(|v| !v.is_none()) else { continue };
+        let value = match spec.kind {
+            OptionKind::Bool => {
+                if !v.is_instance_of::<PyBool>() {
+                    return Err(option_type_error(py, name, "a bool", v));
+                }
+                OptionValue::Bool(v.extract()?)
+            }
+            OptionKind::Int { .. } => {
+                if v.is_instance_of::<PyBool>() {
+                    return Err(option_type_error(py, name, "an integer", v));
+                }
+                OptionValue::Int(v.extract().map_err(|_| option_type_error(py, name, "an integer", v))?)
+            }
+            OptionKind::Float { .. } => {
+                if v.is_instance_of::<PyBool>() || v.is_instance_of::<PyString>() {
+                    return Err(option_type_error(py, name, "a number", v));
+                }
+                OptionValue::Float(v.extract().map_err(|_| option_type_error(py, name, "a number", v))?)
+            }
+            OptionKind::Choice(choices) => {
+                let expected = format!("a str, one of {choices:?}");
+                OptionValue::Str(v.extract().map_err(|_| option_type_error(py, name, &expected, v))?)
+            }
+            OptionKind::Vertices => {
+                let (idx, _) = indices(v, name, Layout::Vector("K"), |entry, vertex| {
+                    let reason = format!("entry {entry}: vertex index {vertex} out of range (mesh has {n_vertices} vertices)");
+                    error(py, Kind::Option, format!("option {name}: {reason}"), attrs![py; "option" => name.to_string(), "reason" => reason])
+                })?;
+                OptionValue::Vertices(idx)
+            }
+            OptionKind::VertexValues => {
+                return Err(error(py, Kind::Uvflat, format!("option {name}: per-vertex values are not read here"), attrs![py;]))
+            }
+        };
+        o.set(name, &value).map_err(|e| map_uv_error(py, e, "fit_to"))?;
     }
     Ok(o)
 }
@@ -329,7 +329,7 @@ fn read_triangles(py: Python<'_>, triangles: Option<&Bound<'_, PyAny>>, n_corner
 #[pyo3(signature = (positions, corner_verts, face_sizes, *, method = None, seams = None, selected = None,
                     pins = None, pin_uvs = None, fit_to = None, triangles = None, auto_seams = None,
                     max_stretch = None, max_cones = None, avoid_vertices = None, sharp_angle = None,
-                    progress = None, **options))]
+                    visibility_weight = None, symmetry = None, progress = None, **options))]
 #[allow(clippy::too_many_arguments)]
 fn unwrap(
     py: Python<'_>,
@@ -348,6 +348,8 @@ fn unwrap(
     max_cones: Option<&Bound<'_, PyAny>>,
     avoid_vertices: Option<&Bound<'_, PyAny>>,
     sharp_angle: Option<&Bound<'_, PyAny>>,
+    visibility_weight: Option<&Bound<'_, PyAny>>,
+    symmetry: Option<&Bound<'_, PyAny>>,
     progress: Option<&Bound<'_, PyAny>>,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PyUnwrapResult> {
@@ -394,7 +396,16 @@ fn unwrap(
         Some(f) => Fit::Previous(convert::float_rows::<2>(f, "fit_to", "C")?),
     };
 
-    let auto_seams = read_auto_seams(py, auto_seams, max_stretch, max_cones, avoid_vertices, sharp_angle, n_vertices)?;
+    let given = [
+        ("auto_seams", auto_seams),
+        ("max_stretch", max_stretch),
+        ("max_cones", max_cones),
+        ("avoid_vertices", avoid_vertices),
+        ("sharp_angle", sharp_angle),
+        ("visibility_weight", visibility_weight),
+        ("symmetry", symmetry),
+    ];
+    let auto_seams = read_auto_seams(py, &given, n_vertices)?;
     let method_name = method.name().to_string();
     let raised: Arc<Mutex<Option<PyErr>>> = Arc::new(Mutex::new(None));
     let progress = match progress.filter(|p| !p.is_none()) {
@@ -566,6 +577,7 @@ fn _uvflat(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyMetrics>()?;
     m.add("METHODS", PyTuple::new(py, method_names())?)?;
     m.add("METHOD_OPTIONS", options::method_options_dict(py)?)?;
+    m.add("AUTO_SEAM_OPTIONS", options::auto_seam_options_tuple(py)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     errors::register(m)?;
     Ok(())

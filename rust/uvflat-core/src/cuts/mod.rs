@@ -27,6 +27,8 @@
 //! * [`AVOID_COST`] (infinite: never cut) on edges touching a vertex the user asked to keep
 //!   free of seams (such vertices never become cones).
 //!
+//! The options ([`AutoSeamOptions`]) are declared in [`options`] (`uvflat.AUTO_SEAM_OPTIONS`).
+//!
 //! Everything is deterministic: ties break by ids.
 
 pub mod cones;
@@ -34,6 +36,7 @@ pub mod cut_graph;
 pub mod fiedler;
 pub mod graph;
 pub mod min_cut;
+pub mod options;
 pub mod planar_split;
 pub mod split;
 pub mod symmetric_cut;
@@ -45,7 +48,8 @@ use crate::error::{Result, UvError};
 use crate::mesh::PolyMesh;
 
 pub use graph::ChartGraph;
-pub use symmetry::Symmetry;
+pub use options::auto_seam_options;
+pub use symmetry::{Symmetry, UnknownSymmetry};
 
 /// Cost factor of a cut along a sharp edge (cheaper: seams hide along creases).
 pub const SHARP_FACTOR: f64 = 0.2;

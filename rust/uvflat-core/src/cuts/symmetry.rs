@@ -38,6 +38,56 @@ pub enum Symmetry {
     Auto,
 }
 
+impl Symmetry {
+    /// The names [`Symmetry::parse`] accepts, in declaration order (the choices of the
+    /// `symmetry` option in [`super::options::auto_seam_options`]).
+    pub const NAMES: &'static [&'static str] = &["none", "x", "y", "z", "auto"];
+
+    /// The name of this symmetry (one of [`Symmetry::NAMES`]).
+    pub fn name(self) -> &'static str {
+        match self {
+            Symmetry::None => "none",
+            Symmetry::X => "x",
+            Symmetry::Y => "y",
+            Symmetry::Z => "z",
+            Symmetry::Auto => "auto",
+        }
+    }
+
+    /// The symmetry named `name` (`"none"`, `"x"`, `"y"`, `"z"` or `"auto"`, lower case).
+    ///
+    /// Errors: [`UnknownSymmetry`] holding the name.
+    pub fn parse(name: &str) -> Result<Symmetry, UnknownSymmetry> {
+        match name {
+            "none" => Ok(Symmetry::None),
+            "x" => Ok(Symmetry::X),
+            "y" => Ok(Symmetry::Y),
+            "z" => Ok(Symmetry::Z),
+            "auto" => Ok(Symmetry::Auto),
+            other => Err(UnknownSymmetry(other.to_string())),
+        }
+    }
+}
+
+impl std::str::FromStr for Symmetry {
+    type Err = UnknownSymmetry;
+
+    fn from_str(s: &str) -> Result<Symmetry, UnknownSymmetry> {
+        Symmetry::parse(s)
+    }
+}
+
+impl std::fmt::Display for Symmetry {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// A symmetry name [`Symmetry::parse`] does not know.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown symmetry {0:?}; expected one of \"none\", \"x\", \"y\", \"z\", \"auto\"")]
+pub struct UnknownSymmetry(pub String);
+
 /// Largest distance between a reflected vertex and its match, relative to the bounding-box
 /// diagonal.
 pub const TOLERANCE: f64 = 1e-4;

@@ -96,6 +96,8 @@ pub enum OptionValue {
     /// Values at chosen mesh vertices, `(vertex, value)` (e.g. ABF's `angle_sums`; from Python
     /// a pair `(vertex indices, values)` of arrays).
     VertexValues(Vec<(u32, f64)>),
+    /// Mesh vertex indices (automatic seams' `avoid_vertices`).
+    Vertices(Vec<u32>),
 }
 
 /// Names accepted by [`Method::parse`].
@@ -114,6 +116,7 @@ fn as_float(name: &'static str, v: &OptionValue) -> Result<f64> {
         OptionValue::Bool(b) => Err(opt_err(name, format!("expected a number, got the boolean {b}"))),
         OptionValue::Str(s) => Err(opt_err(name, format!("expected a number, got the string {s:?}"))),
         OptionValue::VertexValues(_) => Err(opt_err(name, "expected a number, got per-vertex values")),
+        OptionValue::Vertices(_) => Err(opt_err(name, "expected a number, got vertex indices")),
     }
 }
 
@@ -125,6 +128,7 @@ fn as_count(name: &'static str, v: &OptionValue) -> Result<usize> {
         OptionValue::Bool(b) => Err(opt_err(name, format!("expected a positive integer, got the boolean {b}"))),
         OptionValue::Str(s) => Err(opt_err(name, format!("expected a positive integer, got the string {s:?}"))),
         OptionValue::VertexValues(_) => Err(opt_err(name, "expected a positive integer, got per-vertex values")),
+        OptionValue::Vertices(_) => Err(opt_err(name, "expected a positive integer, got vertex indices")),
     }
 }
 

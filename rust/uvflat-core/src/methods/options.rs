@@ -3,35 +3,44 @@
 //! One table, read by the Python module (`uvflat.METHOD_OPTIONS`) and through it by the
 //! add-on, the batch script and the type stub's tests, so that every front end offers the
 //! options [`Method::parse`](super::Method::parse) accepts with the defaults it uses. A test
-//! checks that parsing the declared defaults gives each method's `Default` options.
+//! checks that parsing the declared defaults gives each method's `Default` options. The
+//! options of automatic seams are declared the same way in
+//! [`crate::cuts::options::auto_seam_options`].
 
 /// The type and domain of an option.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum OptionKind {
     /// An integer in `min..=max`.
     Int { min: i64, max: i64 },
-    /// A float; `min_exclusive` tells whether `min` itself is refused.
-    Float { min: f64, min_exclusive: bool },
+    /// A float in `[min, max]`; `min_exclusive` / `max_exclusive` tell whether `min` / `max`
+    /// itself is refused (`max` is infinite for no upper bound).
+    Float { min: f64, min_exclusive: bool, max: f64, max_exclusive: bool },
     /// One of the strings.
     Choice(&'static [&'static str]),
     /// `(vertex indices, values)`: a value at chosen mesh vertices.
     VertexValues,
+    /// A boolean.
+    Bool,
+    /// Mesh vertex indices.
+    Vertices,
 }
 
 /// The default value of an option.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum OptionDefault {
+    Bool(bool),
     Int(i64),
     Float(f64),
     Str(&'static str),
-    /// No value (an empty list of vertex values).
+    /// No value (an empty list of vertex values or indices; an option that is off).
     Empty,
 }
 
 /// One declared option.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OptionSpec {
-    /// Keyword accepted by [`Method::parse`](super::Method::parse).
+    /// Keyword accepted by [`Method::parse`](super::Method::parse) (or by
+    /// [`AutoSeamOptions::parse`](crate::AutoSeamOptions::parse)).
     pub name: &'static str,
     pub kind: OptionKind,
     pub default: OptionDefault,
@@ -40,8 +49,8 @@ pub struct OptionSpec {
 }
 
 const ITERATIONS: OptionKind = OptionKind::Int { min: 1, max: i64::MAX };
-const POSITIVE: OptionKind = OptionKind::Float { min: 0.0, min_exclusive: true };
-const NON_NEGATIVE: OptionKind = OptionKind::Float { min: 0.0, min_exclusive: false };
+const POSITIVE: OptionKind = OptionKind::Float { min: 0.0, min_exclusive: true, max: f64::INFINITY, max_exclusive: false };
+const NON_NEGATIVE: OptionKind = OptionKind::Float { min: 0.0, min_exclusive: false, max: f64::INFINITY, max_exclusive: false };
 const ENERGY_CHANGE: &str = "stop when the energy changes by less than this (relative)";
 
 const FIXED: &[OptionSpec] = &[OptionSpec {

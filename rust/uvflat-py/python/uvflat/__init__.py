@@ -17,6 +17,7 @@ UVs are per corner (Blender's "loop"), so a seam can give one vertex several UVs
 """
 
 from ._uvflat import (
+    AUTO_SEAM_OPTIONS,
     METHOD_OPTIONS,
     METHODS,
     AngleSumError,
@@ -43,6 +44,7 @@ from ._uvflat import (
 from ._uvflat import unwrap as _native_unwrap
 
 __all__ = [
+    "AUTO_SEAM_OPTIONS",
     "METHOD_OPTIONS",
     "METHODS",
     "AngleSumError",
@@ -72,8 +74,8 @@ __all__ = [
 
 def unwrap(positions, corner_verts, face_sizes, *, method="abf", seams=None, selected=None,
            pins=None, pin_uvs=None, fit_to=None, triangles=None, auto_seams=True, max_stretch=2.0,
-           max_cones=8,
-           avoid_vertices=None, sharp_angle=None, progress=None, **options):
+           max_cones=8, avoid_vertices=None, sharp_angle=None, visibility_weight=1.0,
+           symmetry="none", progress=None, **options):
     """Unwrap the selected faces of a polygon mesh into per-corner UVs.
 
     The selection is split into charts along seams, non-manifold edges (counted in
@@ -118,6 +120,16 @@ def unwrap(positions, corner_verts, face_sizes, *, method="abf", seams=None, sel
             them and none becomes a cone).
         sharp_angle: dihedral angle in radians from which an edge counts as sharp and is
             preferred for seams; default None (no preference).
+        visibility_weight: how much dearer a seam is on exposed surface than in hidden
+            places, from 0 to 100 (default 1.0: a fully exposed edge costs twice a fully
+            occluded one; 0 turns the term off). Exposure is per-vertex ambient occlusion:
+            32 rays from each vertex against the mesh near the chart.
+        symmetry: mirror plane the seams keep, "none" (default), "x", "y", "z" (the plane
+            across that axis through the chart's centre) or "auto" (the first principal axis
+            whose plane is a mirror). On a chart that is its own mirror image the cut costs and
+            cones are mirrored, and a closed chart without handles is cut on one half and the
+            cut mirrored, so its seams map onto themselves (a last-resort split is not); a
+            chart that is not symmetric about the plane is cut as without it.
         progress: ``callable(charts_done, charts_total)``, called from the worker threads
             with the GIL held, at most every 0.1 s and once after the last chart; returning
             a false value (``False``, ``0``, ``numpy.False_``; ``None`` goes on) cancels the
@@ -153,7 +165,8 @@ def unwrap(positions, corner_verts, face_sizes, *, method="abf", seams=None, sel
         VertexIndexError, NonFiniteError, FaceSizeError, RepeatedVertexError, SeamError:
             malformed mesh (all subclasses of MeshError).
         PinError: a pin names a missing corner or has a non-finite UV.
-        OptionError: unknown method, unknown option (``err.option`` names it) or bad value.
+        OptionError: unknown method, unknown option (``err.option`` names it) or bad value
+            (of a method option or an automatic-seams option, see :data:`AUTO_SEAM_OPTIONS`).
         AngleSumError: a bad ``angle_sums`` entry (an OptionError naming entry and vertex).
         Cancelled: the progress callback returned ``False``.
         UvflatError: an internal error (a bug), never a crash.
@@ -162,13 +175,14 @@ def unwrap(positions, corner_verts, face_sizes, *, method="abf", seams=None, sel
                           selected=selected, pins=pins, pin_uvs=pin_uvs, fit_to=fit_to,
                           triangles=triangles, auto_seams=auto_seams, max_stretch=max_stretch, max_cones=max_cones,
                           avoid_vertices=avoid_vertices, sharp_angle=sharp_angle,
+                          visibility_weight=visibility_weight, symmetry=symmetry,
                           progress=progress, **options)
 
 
 def plan_seams(positions, corner_verts, face_sizes, *, method="abf", seams=None, selected=None,
                pins=None, pin_uvs=None, fit_to=None, triangles=None, auto_seams=True,
-               max_stretch=2.0, max_cones=8, avoid_vertices=None, sharp_angle=None, progress=None,
-               **options):
+               max_stretch=2.0, max_cones=8, avoid_vertices=None, sharp_angle=None,
+               visibility_weight=1.0, symmetry="none", progress=None, **options):
     """The seams :func:`unwrap` would add with the same arguments, without any UVs: review and
     edit them, then unwrap with them as ``seams``.
 
@@ -183,4 +197,5 @@ def plan_seams(positions, corner_verts, face_sizes, *, method="abf", seams=None,
                           selected=selected, pins=pins, pin_uvs=pin_uvs, fit_to=fit_to,
                           triangles=triangles, auto_seams=auto_seams, max_stretch=max_stretch,
                           max_cones=max_cones, avoid_vertices=avoid_vertices,
-                          sharp_angle=sharp_angle, progress=progress, **options).new_seams
+                          sharp_angle=sharp_angle, visibility_weight=visibility_weight,
+                          symmetry=symmetry, progress=progress, **options).new_seams

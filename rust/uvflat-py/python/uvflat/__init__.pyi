@@ -19,20 +19,31 @@ METHODS: Final[tuple[str, ...]]
 """Names accepted by ``unwrap(method=...)``, e.g. ``("tutte", "harmonic", "mean_value", "lscm", "spectral")``."""
 
 class OptionSpec(TypedDict):
-    """One declared option of a method (see :data:`METHOD_OPTIONS`)."""
+    """One declared option of a method or of automatic seams (see :data:`METHOD_OPTIONS`,
+    :data:`AUTO_SEAM_OPTIONS`). Absent bounds and choices are None; a default of None means
+    the option is off or empty."""
 
     name: str
-    type: Literal["int", "float", "choice", "vertex_values"]
-    default: int | float | str | None
+    type: Literal["bool", "int", "float", "choice", "vertices", "vertex_values"]
+    default: bool | int | float | str | None
     min: int | float | None
-    max: int | None
+    max: int | float | None
     min_exclusive: bool
+    max_exclusive: bool
     choices: tuple[str, ...] | None
     doc: str
 
 METHOD_OPTIONS: Final[dict[str, tuple[OptionSpec, ...]]]
 """Every method's options as the core declares them: name, type, default, range, choices, doc.
 The single source the add-on, the batch script and this stub are tested against."""
+
+AUTO_SEAM_OPTIONS: Final[tuple[OptionSpec, ...]]
+"""The automatic-seams keywords of :func:`unwrap` and :func:`plan_seams` as the core declares
+them (``auto_seams``, ``max_stretch``, ``max_cones``, ``avoid_vertices``, ``sharp_angle``,
+``visibility_weight``, ``symmetry``), in the order front ends show them."""
+
+Symmetry = Literal["none", "x", "y", "z", "auto"]
+"""Mirror planes automatic seams can keep (``unwrap(symmetry=...)``)."""
 
 Method = Literal["tutte", "harmonic", "mean_value", "lscm", "spectral", "abf", "arap", "slim",
                  "mips", "scaffold"]
@@ -272,6 +283,8 @@ def unwrap(
     max_cones: int = 8,
     avoid_vertices: _Ints | None = None,
     sharp_angle: float | None = None,
+    visibility_weight: float = 1.0,
+    symmetry: Symmetry = "none",
     progress: Callable[[int, int], bool | None] | None = None,
     **options: Unpack[UnwrapOptions],
 ) -> UnwrapResult:
@@ -325,6 +338,15 @@ def unwrap(
             them and none becomes a cone).
         sharp_angle: dihedral angle in radians from which an edge counts as sharp and is
             preferred for seams; default None (no preference).
+        visibility_weight: how much dearer a seam is on exposed surface than in hidden
+            places, 0 to 100 (default 1.0: a fully exposed edge costs twice a fully occluded
+            one; 0 turns it off). Exposure is per-vertex ambient occlusion (32 rays from each
+            vertex against the mesh near the chart).
+        symmetry: mirror plane the seams keep: "none" (default), "x", "y", "z" (across that
+            axis through the chart's centre) or "auto" (a principal axis). On a chart that is
+            its own mirror image cut costs and cones are mirrored, and a closed chart without
+            handles is cut on one half and the cut mirrored, so its seams map onto themselves
+            (a last-resort split is not); other charts are cut as without it.
 
     Raises:
         InputError: wrong shape, dtype or length; a non-finite ``fit_to`` UV.
@@ -333,7 +355,8 @@ def unwrap(
         TriangleError: a ``triangles`` row names a missing corner, corners of two faces,
             or a face does not get exactly corners - 2 rows triangulating it (a MeshError).
         PinError: a pin names a missing corner or has a non-finite UV.
-        OptionError: unknown method, unknown option or bad option value.
+        OptionError: unknown method, unknown option or bad option value (``err.option``
+            names it; the automatic-seams options' domains are in :data:`AUTO_SEAM_OPTIONS`).
         AngleSumError: a bad ``angle_sums`` entry (an OptionError naming entry and vertex).
         Cancelled: the progress callback returned ``False``.
         UvflatError: an internal error (a bug), never a crash.
@@ -404,6 +427,8 @@ def plan_seams(
     max_cones: int = 8,
     avoid_vertices: _Ints | None = None,
     sharp_angle: float | None = None,
+    visibility_weight: float = 1.0,
+    symmetry: Symmetry = "none",
     progress: Callable[[int, int], bool | None] | None = None,
     **options: Unpack[UnwrapOptions],
 ) -> npt.NDArray[np.uint32]:
