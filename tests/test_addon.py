@@ -1161,30 +1161,52 @@ def test_heat_colors_scale(ext):
     np.testing.assert_allclose(rgba[2, :3], dist._RGB[-1])
     np.testing.assert_allclose(rgba[3, :3], dist._RGB[-1])
     np.testing.assert_allclose(rgba[4, :3], 0.5)
-    # flips: a square of two triangles, one of them mirrored in UV
-    uv = np.array([[0, 0], [1, 0], [1, 1], [0, 0], [1, 1], [1, 0]], float)
-    flipped = dist.flipped_faces(uv, [3, 3], [0, 0], [True, True])
-    assert flipped.sum() == 1
-    uv[3:] = [[0, 0], [1, 1], [2, 2]]  # zero UV area counts as flipped
-    assert dist.flipped_faces(uv, [3, 3], [0, 0], [True, True]).tolist() == [False, True]
 
 
-def test_select_flipped_selects_exactly_the_flipped_faces(ext, scene):
-    obj = suzanne()
+def test_select_flipped_measures_the_existing_map(ext, scene):
+    """Select Flipped asks the core about the active UV map as it is, one uvflat never made:
+    a 3 x 3 quad grid mapped flat, with two inner vertices moved deep into a corner quad each,
+    folds exactly those two quads (darts, reflex at the moved vertex; the quads around them
+    stay convex). Hidden faces are never selected."""
     io = ext.mesh_io
-    result, _ = unwrap(ext, [obj], method="tutte", pack="OFF")
-    assert result == {"FINISHED"}
-    assert not io.read_attribute(obj.data, "uvflat_flipped").any(), "Tutte never flips"
-    marked = np.zeros(len(obj.data.polygons), dtype=bool)
-    marked[[3, 17, 200]] = True
-    io.write_attribute(obj.data, "uvflat_flipped", "FACE", "BOOLEAN", marked)
-    common.edit_mode([obj])
+    n = 3
+    xs, ys = np.meshgrid(np.arange(n + 1.0), np.arange(n + 1.0), indexing="xy")
+    positions = np.column_stack([xs.ravel(), ys.ravel(), np.zeros(xs.size)])
+    vid = lambda i, j: j * (n + 1) + i  # noqa: E731
+    corner_verts = np.array([[vid(i, j), vid(i + 1, j), vid(i + 1, j + 1), vid(i, j + 1)]
+                             for j in range(n) for i in range(n)]).ravel()
+    obj = common.link_mesh_object("Folded", io.new_mesh("Folded", positions, corner_verts,
+                                                         np.full(n * n, 4)))
+    name, _ = io.ensure_uv_map(obj.data)
+    uv = positions[corner_verts, :2].copy()
+    uv[corner_verts == vid(1, 1)] = [0.2, 0.2]  # into quad 0
+    uv[corner_verts == vid(2, 2)] = [2.8, 2.8]  # into quad 8
+    io.write_uv(obj.data, name, uv)
+    assert io.read_attribute(obj.data, "uvflat_flipped") is None, "never unwrapped by uvflat"
+    # independently of the core: the quads that are not strictly convex in UV (all four
+    # triangles of both diagonal splits counter-clockwise)
+    c = np.arange(4 * n * n).reshape(-1, 4)
+    uv_read = read(ext, obj).uv
+    convex = np.ones(n * n, dtype=bool)
+    for a, b, d in ((0, 1, 2), (0, 2, 3), (0, 1, 3), (1, 2, 3)):
+        convex &= _signed(uv_read, c[:, a], c[:, b], c[:, d]) > 0
+    assert np.flatnonzero(~convex).tolist() == [0, 8]
+    common.edit_mode([obj], select_all=False)
     try:
         assert bpy.ops.uv.uvflat_select_flipped() == {"FINISHED"}
         assert obj.mode == "EDIT"
     finally:
         common.object_mode()
-    np.testing.assert_array_equal(io.read_face_selection(obj.data), marked)
+    assert np.flatnonzero(io.read_face_selection(obj.data)).tolist() == [0, 8]
+    hidden = np.zeros(n * n, dtype=bool)
+    hidden[8] = True
+    obj.data.polygons.foreach_set("hide", hidden)
+    common.edit_mode([obj], select_all=False)
+    try:
+        assert bpy.ops.uv.uvflat_select_flipped() == {"FINISHED"}
+    finally:
+        common.object_mode()
+    assert np.flatnonzero(io.read_face_selection(obj.data, include_hidden=True)).tolist() == [0]
 
 
 def test_heat_map_toggle_sets_and_restores_the_viewport(ext, scene):
