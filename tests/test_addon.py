@@ -547,6 +547,51 @@ def test_scene_defaults_panel_properties(ext, scene):
     assert ext.methods.core_options(defaults) == {"max_iterations": 321, "tolerance": 1e-10}
 
 
+def test_texel_density_settings_go_from_the_sidebar_to_the_unwrap(ext, scene):
+    """The sidebar's Texel Density (declared once with the other shared settings) is drawn in
+    the redo panel and the sidebar, copied into the operator when it is invoked, and reaches
+    the packing: Fixed 256 px/m at 2048 px is 1/8 UV unit per metre."""
+    defaults = bpy.context.scene.uvflat
+    names = ("density_mode", "texel_density", "texture_size")
+    assert set(names) <= set(ext.methods.SETTING_NAMES)
+    drawn = []
+    layout = SimpleNamespace(prop=lambda _props, name, **_kw: drawn.append(name),
+                             column=lambda: layout, use_property_split=True,
+                             use_property_decorate=False,
+                             prop_search=lambda _p, name, *_a: drawn.append(name))
+    ext.methods.draw_settings(layout, defaults)
+    assert set(names) <= set(drawn)
+    defaults.density_mode, defaults.texel_density, defaults.texture_size = "FIXED", 256.0, 2048
+    defaults.shape_method = "AABB"  # packs in a millisecond: the unwrap runs in one go
+    try:
+        settings = ext.engine.PackSettings(**ext.methods.pack_settings(defaults))
+        assert (settings.density, settings.texel_density, settings.texture_size) == \
+            ("FIXED", 256.0, 2048)
+        assert settings.uv_per_metre == 1 / 8
+        # invoke copies the sidebar's values into the operator (headless Blender runs no
+        # invoke from bpy.ops, so it is called on a stand-in of the operator's properties,
+        # as test_invoke_keeps_the_properties_the_caller_set does), which then runs with them
+        props = _Props(dict.fromkeys(ext.methods.SETTING_NAMES), set())
+        ran = []
+        stand_in = SimpleNamespace(properties=props,
+                                   execute=lambda ctx: ran.append(ctx) or {"FINISHED"})
+        assert ext.operators.UV_OT_uvflat_unwrap.invoke(stand_in, bpy.context, None) == \
+            {"FINISHED"} and ran
+        assert (props.density_mode, props.texel_density, props.texture_size) == \
+            ("FIXED", 256.0, 2048)
+        obj = suzanne()
+        result, summary = unwrap(ext, [obj], **{n: getattr(props, n) for n in names},
+                                 shape_method=props.shape_method)
+        assert result == {"FINISHED"}, summary
+        assert summary.density == "FIXED" and summary.texture_size == 2048
+        rows = ext.engine.chart_rows(summary)
+        assert rows and all(r["density"] == pytest.approx(256.0, rel=0.02) for r in rows
+                            if r["status"] != "failed")
+    finally:
+        for name in names + ("shape_method",):
+            defaults.property_unset(name)
+
+
 # ---------------------------------------------------------------------------------------------
 # ABF / ABF++
 
