@@ -299,7 +299,9 @@ def common_properties() -> dict[str, Any]:
 
 
 def density_properties() -> dict[str, Any]:
-    """Fresh bpy properties of the new islands' texel density."""
+    """Fresh bpy properties of the new islands' texel density. Not remembered from one call
+    of the operator to the next (``SKIP_SAVE``): a script or shortcut that names no density
+    gets Auto, and invoking it copies the sidebar's."""
     return {
         "density_mode": EnumProperty(
             name="Texel Density",
@@ -311,19 +313,20 @@ def density_properties() -> dict[str, Any]:
                    ("FIXED", "Fixed", "Pixels per metre of surface on a texture of Texture "
                                       "Size pixels; packed without scaling, so islands may "
                                       "not fit in the tile")),
-            default="AUTO",
+            default="AUTO", options={"SKIP_SAVE"},
         ),
         "texel_density": FloatProperty(
             name="Px per Metre",
             description="Texture pixels per metre of surface (world size) with a Fixed texel "
                         "density",
             default=1024.0, min=1e-3, max=1e7, soft_min=1.0, soft_max=8192.0, precision=1,
+            options={"SKIP_SAVE"},
         ),
         "texture_size": IntProperty(
             name="Texture Size",
             description="Texture size in pixels of the Fixed texel density and of the "
                         "densities the chart list shows",
-            default=1024, min=1, max=65536, soft_max=16384,
+            default=1024, min=1, max=65536, soft_max=16384, options={"SKIP_SAVE"},
         ),
     }
 

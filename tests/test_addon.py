@@ -403,7 +403,8 @@ def test_failed_chart_keeps_uvs_exactly(ext, scene, monkeypatch):
         return SimpleNamespace(uv=np.asarray(r.uv), chart=chart, face_solved=solved,
                                charts=charts, seconds=r.seconds,
                                face_conformal=np.where(failed, np.nan, r.face_conformal),
-                               face_area=np.where(failed, np.nan, r.face_area))
+                               face_area=np.where(failed, np.nan, r.face_area),
+                               face_flips=np.where(failed, 0, r.face_flips))
 
     monkeypatch.setattr(uvflat, "unwrap", unwrap_with_failure)
     obj = suzanne()

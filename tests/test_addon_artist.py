@@ -420,7 +420,9 @@ def test_seams_of_a_failed_chart_are_not_marked(ext, scene, monkeypatch):
         return SimpleNamespace(uv=np.asarray(r.uv), chart=np.asarray(r.chart), face_solved=failed,
                                charts=charts, seconds=r.seconds, new_seams=np.asarray(r.new_seams),
                                face_conformal=np.full(len(failed), np.nan),
-                               face_area=np.full(len(failed), np.nan), non_manifold_edges=0)
+                               face_area=np.full(len(failed), np.nan),
+                               face_flips=np.zeros(len(failed), dtype=np.uint32),
+                               non_manifold_edges=0)
 
     io = ext.mesh_io
     bpy.ops.mesh.primitive_uv_sphere_add(segments=16, ring_count=8)
