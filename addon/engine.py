@@ -84,6 +84,15 @@ class Summary:
     # tile packed into; with Around Others the tile's other islands count too); None when
     # nothing was packed
     coverage: float | None = None
+    # texel density: the mode the new islands got (AUTO, MATCH, FIXED; MATCH with nothing
+    # to match is AUTO), the FIXED px/m, the texture size of the per-chart px/m, and whether
+    # FIXED islands did not fit in their UDIM tile
+    density: str = "AUTO"
+    texel_density: float = 0.0
+    texture_size: int = 1024
+    density_overflow: bool = False
+    # object name -> UV units per metre of surface of every chart (NaN where not solved)
+    chart_density: dict = field(default_factory=dict)
     results: dict = field(default_factory=dict)  # object name -> uvflat.UnwrapResult
     # Seconds per phase of the last run (for benchmarks); they add up to ``seconds``:
     # "read", "solve", "quality" (the core's measure of the per-face distortion), "write"
@@ -125,6 +134,11 @@ class Summary:
                 text += f" in {faces} face{'s' * (faces != 1)} (Select Flipped)"
         if self.coverage is not None:
             text += f"; tile coverage {100 * self.coverage:.0f}%"
+        if self.density == "FIXED":
+            text += (f"; texel density {self.texel_density:g} px/m at {self.texture_size} px"
+                     + (": islands larger than their tile" if self.density_overflow else ""))
+        elif self.density == "MATCH":
+            text += "; texel density of the islands left alone"
         cheaper = [s for s in self.pack_shapes if s != self.pack_shape]
         if self.pack_shape and cheaper:
             text += f"; many islands: packed as {' and '.join(SHAPE_NAMES[s] for s in cheaper)}"
@@ -155,14 +169,19 @@ def _grouped(problems, shown=2) -> str:
 
 def chart_rows(summary, limit=None):
     """One dict per chart of ``summary`` (object, chart, method, status, faces, flips, overlap,
-    conformal, area, seconds, reason), the ones needing attention first: failed, fallback,
-    flipped, overlapping, then by conformal distortion."""
+    conformal, area, density: texel density in pixels per metre at the summary's texture size
+    (NaN where not solved), seconds, reason), the ones needing attention first: failed,
+    fallback, flipped, overlapping, then by conformal distortion."""
     rows = []
     for name, result in summary.results.items():
+        per_metre = summary.chart_density.get(name)
         for c in result.charts:
+            uv_per_metre = (float(per_metre[c.id]) if per_metre is not None
+                            and c.id < len(per_metre) else float("nan"))
             rows.append({"object": name, "chart": c.id, "method": c.method, "status": c.status,
                          "faces": c.faces, "flips": c.flips, "overlap": bool(c.overlap),
-                         "conformal": c.conformal, "area": c.area, "seconds": c.seconds,
+                         "conformal": c.conformal, "area": c.area,
+                         "density": uv_per_metre * summary.texture_size, "seconds": c.seconds,
                          "reason": c.reason or "", "code": getattr(c, "reason_code", "")})
 
     def attention(row):
@@ -409,6 +428,15 @@ class PackSettings:
     but may be overlapped); ``OFF`` fits each new island to where its faces' previous UVs were.
     ``shape_method`` is the shape asked for (see :func:`pack_shape`); ``orient`` turns the
     new islands to their smallest bounding box first.
+
+    ``density`` sets the new islands' texel density: ``AUTO`` as the packing mode does it
+    (around others: theirs; whole tile: scaled to fill it; off: where the old UVs were);
+    ``MATCH`` the density of the islands left alone in every packing mode (the packer scales
+    nothing; as ``AUTO`` when there are none); ``FIXED`` ``texel_density`` pixels per metre of
+    surface (world size, scene units) on a texture of ``texture_size`` pixels, i.e.
+    :attr:`uv_per_metre` UV units per metre, packed without scaling (islands may not fit in
+    the tile: the summary says so). ``texture_size`` also gives the pixels of the per-island
+    densities the summary lists.
     """
 
     mode: str = "AROUND"
@@ -417,6 +445,14 @@ class PackSettings:
     shape_method: str = "CONCAVE"
     rotate: bool = True
     orient: bool = True  # new islands turned to their smallest bounding box first
+    density: str = "AUTO"          # AUTO, MATCH or FIXED
+    texel_density: float = 1024.0  # pixels per metre (FIXED)
+    texture_size: int = 1024       # texture pixels (FIXED; and the summary's px/m)
+
+    @property
+    def uv_per_metre(self) -> float:
+        """UV units per metre of surface of the ``FIXED`` density."""
+        return float(self.texel_density) / float(self.texture_size)
 
     @property
     def rotate_method(self) -> str:
@@ -445,11 +481,12 @@ class _PackPlan:
     uv: np.ndarray               # (C, 2) float64: the UVs as they are being packed
     area3: np.ndarray            # (F,) surface area of every face
     area_uv: np.ndarray          # (F,) UV area of every face (as written)
-    reference: float | None = None  # UV area per surface area of the locked faces
+    matched: np.ndarray | None = None  # (F,) faces whose density the new islands take
+    reference: float | None = None  # UV area per surface area of the matched faces
     keep_angle: bool = False     # the packer must not rotate these islands (see _pack)
 
 
-def _plan(job: _Job, faces, locked) -> _PackPlan:
+def _plan(job: _Job, faces, locked, matched=None) -> _PackPlan:
     written = mesh_io.read_uv(job.obj.data, job.uv_name)
     chart = np.asarray(job.result.chart, dtype=np.int64)
     ids, inverse = np.unique(chart[faces], return_inverse=True)
@@ -462,15 +499,62 @@ def _plan(job: _Job, faces, locked) -> _PackPlan:
                      packing.island_tiles(old, job.face_sizes, island, len(ids)),
                      packing.face_tiles(written, job.face_sizes), written.astype(np.float64),
                      area3, area_uv)
-    plan.reference = packing.density(area3, area_uv, locked) if locked.any() else None
+    plan.matched = locked if matched is None else matched
+    plan.reference = (packing.density(area3, area_uv, plan.matched) if plan.matched.any()
+                      else None)
     return plan
 
 
-def _island_ratio(plan: _PackPlan):
-    """UV area per surface area of every new island."""
+def world_face_areas(job: _Job, uv=None):
+    """Surface area of every face of ``job``'s mesh in square metres (the object's world
+    transform and the scene's unit scale applied), and the UV area of ``uv`` (default the
+    written map) per face; both over Blender's render triangles."""
+    matrix = np.array(job.obj.matrix_world, dtype=np.float64)[:3, :3]
+    scene = bpy.context.scene
+    metres = float(scene.unit_settings.scale_length) if scene is not None else 1.0
+    positions = job.positions @ matrix.T * metres
+    if uv is None:
+        uv = mesh_io.read_uv(job.obj.data, job.uv_name)
+    return packing.face_areas(positions, job.corner_verts, job.face_sizes, job.triangles, uv)
+
+
+def _scale_to_density(plans, settings) -> bool:
+    """Scale the new islands of ``plans`` (their ``uv``) to the texel density ``settings``
+    asks for (see :class:`PackSettings`); returns whether their size is now set (the packer
+    must then scale nothing). ``AUTO`` and ``MATCH``: each mesh's matched faces' density,
+    else all meshes' together, nothing when there are none; ``FIXED``: its UV units per
+    metre, by world surface."""
+    if settings.density == "FIXED":
+        target = settings.uv_per_metre ** 2
+        for plan in plans:
+            area3, _ = world_face_areas(plan.job, plan.uv)
+            _scale_plan(plan, target, _island_ratio(plan, area3))
+        return True
+    area3 = sum(float(p.area3[p.matched & (p.area_uv > 0)].sum()) for p in plans)
+    area_uv = sum(float(p.area_uv[p.matched & (p.area3 > 0)].sum()) for p in plans)
+    reference = area_uv / area3 if area3 > 0 and area_uv > 0 else None
+    if reference is None:
+        return False
+    for plan in plans:
+        target = plan.reference if plan.reference is not None else reference
+        _scale_plan(plan, target, _island_ratio(plan))
+    return True
+
+
+def _scale_plan(plan: _PackPlan, target, ratio):
+    """Scale every new island of ``plan`` from UV area per surface area ``ratio`` to
+    ``target`` (islands without area unchanged)."""
+    good = np.isfinite(ratio) & (ratio > 0)
+    factors = np.where(good, np.sqrt(target / np.where(good, ratio, 1.0)), 1.0)
+    packing.scale_islands(plan.uv, plan.job.face_sizes, plan.island, factors)
+
+
+def _island_ratio(plan: _PackPlan, face_area3=None):
+    """UV area per surface area (``face_area3``, default the plan's) of every new island."""
     n = len(plan.tiles)
     inside = plan.island >= 0
-    area3 = np.bincount(plan.island[inside], weights=plan.area3[inside], minlength=n)
+    face_area3 = plan.area3 if face_area3 is None else face_area3
+    area3 = np.bincount(plan.island[inside], weights=face_area3[inside], minlength=n)
     area_uv = np.bincount(plan.island[inside], weights=plan.area_uv[inside], minlength=n)
     with np.errstate(invalid="ignore", divide="ignore"):
         return area_uv / area3
@@ -507,21 +591,10 @@ def _island_counts(plan, faces):
     return len(sizes), int(np.count_nonzero(sizes <= TINY_ISLAND_FACES))
 
 
-def _pack(context, jobs, in_mode, active, settings: PackSettings, only=None, phases=None) -> bool:
-    """Pack the islands of the solved, unpinned charts with Blender's packer (of the jobs in
-    ``only``, default all), around the locked islands when ``settings.mode == "AROUND"``.
-
-    Every new island goes into the UDIM tile its faces were in (``packing``), packed around
-    that tile's locked islands; around existing islands the new ones get the texel density of
-    the islands left alone and the packer scales nothing. Blender's packer rotates in the
-    pixels of the object's texture: islands not corrected for a non-square one would be
-    sheared, so they are turned to their smallest bounding box here and packed unrotated.
-
-    Islands are turned to their smallest bounding box first with ``settings.orient``. The
-    selection (and, around locked islands, the pin flags) are changed for the packer and put
-    back exactly afterwards. Runs from object mode and returns to it (returns False: the
-    objects are not left in edit mode).
-    """
+def _plans(jobs, settings: PackSettings, only=None):
+    """A :class:`_PackPlan` of every job (of ``only``, default all) with new islands to pack
+    or scale: locked faces around others, matched faces around others or with Match
+    Existing."""
     around = settings.mode == "AROUND"
     chosen = None if only is None else {id(job) for job in only}
     plans = []
@@ -531,28 +604,51 @@ def _pack(context, jobs, in_mode, active, settings: PackSettings, only=None, pha
         faces = _pack_faces(job)
         if not faces.any():
             continue
-        locked = _locked_faces(job, faces) if around else np.zeros_like(faces)
-        plans.append(_plan(job, faces, locked))
+        left_alone = _locked_faces(job, faces)
+        locked = left_alone if around else np.zeros_like(faces)
+        plans.append(_plan(job, faces, locked,
+                           left_alone if around or settings.density == "MATCH" else locked))
+    return plans
+
+
+def _scale_in_place(jobs, settings: PackSettings):
+    """Packing off: the new islands of ``jobs``, where their old UVs were, scaled about their
+    centres to the density ``settings`` asks for (Match Existing or Fixed)."""
+    plans = _plans(jobs, settings)
+    if _scale_to_density(plans, settings):
+        _PACK_REPORT.density = settings.density
+        for plan in plans:
+            mesh_io.write_uv(plan.job.obj.data, plan.job.uv_name, plan.uv)
+    return plans
+
+
+def _pack(context, jobs, in_mode, active, settings: PackSettings, only=None, phases=None) -> bool:
+    """Pack the islands of the solved, unpinned charts with Blender's packer (of the jobs in
+    ``only``, default all), around the locked islands when ``settings.mode == "AROUND"``.
+
+    Every new island goes into the UDIM tile its faces were in (``packing``), packed around
+    that tile's locked islands; around existing islands (or with Match Existing) the new ones
+    get the texel density of the islands left alone, with a Fixed density that one, and the
+    packer scales nothing. Blender's packer rotates in the
+    pixels of the object's texture: islands not corrected for a non-square one would be
+    sheared, so they are turned to their smallest bounding box here and packed unrotated.
+
+    Islands are turned to their smallest bounding box first with ``settings.orient``. The
+    selection (and, around locked islands, the pin flags) are changed for the packer and put
+    back exactly afterwards. Runs from object mode and returns to it (returns False: the
+    objects are not left in edit mode).
+    """
+    plans = _plans(jobs, settings, only)
     if not plans:
         return False
     core = import_core()
-    # texel density of the map packed around: each mesh's own, else all of them together
-    reference = None
-    if around:
-        area3 = sum(float(p.area3[p.locked & (p.area_uv > 0)].sum()) for p in plans)
-        area_uv = sum(float(p.area_uv[p.locked & (p.area3 > 0)].sum()) for p in plans)
-        reference = area_uv / area3 if area3 > 0 and area_uv > 0 else None
-    keep_density = reference is not None
-    transformed = False
+    # texel density: around others (or Match Existing) that of the map left alone, each
+    # mesh's own, else all of them together; or the fixed one
+    keep_density = _scale_to_density(plans, settings)
+    _PACK_REPORT.density = settings.density if keep_density else "AUTO"
+    transformed = keep_density
     for plan in plans:
         job = plan.job
-        if keep_density:
-            ratio = _island_ratio(plan)
-            target = plan.reference if plan.reference is not None else reference
-            good = np.isfinite(ratio) & (ratio > 0)
-            factors = np.where(good, np.sqrt(target / np.where(good, ratio, 1.0)), 1.0)
-            packing.scale_islands(plan.uv, job.face_sizes, plan.island, factors)
-            transformed = True
         plan.keep_angle = (settings.rotate and aspect.material_aspect(job.obj) != 1.0
                            and job.aspect == 1.0)
         if plan.keep_angle or settings.orient:
@@ -603,6 +699,7 @@ class _PackReport:
     def __init__(self):
         self.shapes: list[str] = []   # island shapes Blender's packer was given
         self.coverage = None          # see _coverage
+        self.density = "AUTO"         # the density the new islands were given (see _pack)
 
 
 _PACK_REPORT = _PackReport()
@@ -934,6 +1031,9 @@ def _write_and_pack(context, run: Run) -> Summary:
             only = None if packing else [job for job in jobs if not job.fitted]
             if run.seams_only:
                 only = []
+            elif not packing and pack.density != "AUTO":
+                # where the old UVs were, at the density asked for
+                _scale_in_place([job for job in jobs if job.fitted], pack)
             if only is None or only:
                 settings = pack if packing else dataclasses.replace(pack, mode="AROUND")
                 t0, packer = time.perf_counter(), phases.get("pack", 0.0)
@@ -941,6 +1041,12 @@ def _write_and_pack(context, run: Run) -> Summary:
                 # the packer itself is "pack"; the selection and mode changes around it "mode"
                 _lap(phases, "mode", t0 + (phases.get("pack", 0.0) - packer))
                 summary.packed = packing
+            # every chart's texel density on the UVs as written and packed
+            summary.texel_density = float(pack.texel_density)
+            summary.texture_size = int(pack.texture_size)
+            summary.density = _PACK_REPORT.density
+            if not run.seams_only:
+                _measure_density(jobs, summary)
         except BaseException:
             _leave_edit_mode(run.in_mode)
             in_edit = False
@@ -970,10 +1076,36 @@ def _write_and_pack(context, run: Run) -> Summary:
     summary.objects = len(jobs)
     summary.pack_shapes = tuple(_PACK_REPORT.shapes)
     summary.coverage = _PACK_REPORT.coverage
+    summary.density = _PACK_REPORT.density
     summary.seconds = time.perf_counter() - run.start
     phases.pop("other", None)
     phases["other"] = max(0.0, summary.seconds - sum(phases.values()))
     return summary
+
+
+def _measure_density(jobs, summary: Summary):
+    """Every solved chart's texel density (UV units per metre of world surface, on the UVs as
+    written and packed) into ``summary.chart_density``; with a Fixed density, whether a new
+    island does not fit in its UDIM tile (``summary.density_overflow``)."""
+    for job in jobs:
+        if not job.written:
+            continue
+        uv = mesh_io.read_uv(job.obj.data, job.uv_name).astype(np.float64)
+        area3, area_uv = world_face_areas(job, uv)
+        chart = np.asarray(job.result.chart, dtype=np.int64)
+        solved = _solved_faces(job)
+        n = len(job.result.charts)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            summary.chart_density[job.obj.name] = np.sqrt(
+                np.bincount(chart[solved], weights=area_uv[solved], minlength=n)
+                / np.bincount(chart[solved], weights=area3[solved], minlength=n))
+        if summary.density == "FIXED":
+            island = np.where(solved, chart, -1)
+            low, high = packing.island_bounds(uv, job.face_sizes, island, n)
+            mapped = np.isfinite(low).all(axis=1)
+            tile = np.floor(0.5 * (low[mapped] + high[mapped]))
+            if np.any((low[mapped] < tile - 1e-6) | (high[mapped] > tile + 1 + 1e-6)):
+                summary.density_overflow = True
 
 
 def selected_face_count(context) -> int:

@@ -294,6 +294,7 @@ def common_properties() -> dict[str, Any]:
             description="Space between packed islands",
             default=0.001, min=0.0, max=1.0, precision=3, step=0.1,
         ),
+        **density_properties(),
     }
     props.update(auto_seam_properties())
     for key, option in OPTIONS.items():
@@ -357,6 +358,42 @@ def _from_spec(name: str, label: str, description: str, **ui) -> Any:
         return FloatProperty(name=label, description=description, default=default, **bounds,
                              **ui)
     raise ValueError(f"{name}: no property for options of type {kind}")
+
+
+def density_properties() -> dict[str, Any]:
+    """Fresh bpy properties of the new islands' texel density. Not remembered from one call
+    of the operator to the next (``SKIP_SAVE``): a script or shortcut that names no density
+    gets Auto, and invoking it copies the sidebar's."""
+    return {
+        "density_mode": EnumProperty(
+            name="Texel Density",
+            description="Texel density of the new islands",
+            items=(("AUTO", "Auto", "As the packing does it: around others their density, "
+                                    "whole tile scaled to fill it, off where the old UVs were"),
+                   ("MATCH", "Match Existing", "The density of the islands left alone, whatever "
+                                               "the packing (the packer scales nothing)"),
+                   ("FIXED", "Fixed", "Pixels per metre of surface on a texture of Texture "
+                                      "Size pixels; packed without scaling, so islands may "
+                                      "not fit in the tile")),
+            default="AUTO", options={"SKIP_SAVE"},
+        ),
+        "texel_density": FloatProperty(
+            name="Px per Metre",
+            description="Texture pixels per metre of surface (world size) with a Fixed texel "
+                        "density",
+            default=1024.0, min=1e-3, max=1e7, soft_min=1.0, soft_max=8192.0, precision=1,
+            options={"SKIP_SAVE"},
+        ),
+        "texture_size": IntProperty(
+            name="Texture Size",
+            description="Texture size in pixels of the Fixed texel density and of the "
+                        "densities the chart list shows",
+            default=1024, min=1, max=65536, soft_max=16384, options={"SKIP_SAVE"},
+        ),
+    }
+
+
+DENSITY_SETTING_NAMES: tuple[str, ...] = ("density_mode", "texel_density", "texture_size")
 
 
 def auto_seam_properties() -> dict[str, Any]:
@@ -440,7 +477,10 @@ def pack_settings(props) -> dict[str, Any]:
     """Keyword arguments of ``engine.PackSettings`` from ``props`` (operator or defaults)."""
     return {"mode": props.pack, "margin": props.margin, "margin_method": props.margin_method,
             "shape_method": props.shape_method, "rotate": props.rotate,
-            "orient": getattr(props, "orient", True)}
+            "orient": getattr(props, "orient", True),
+            "density": getattr(props, "density_mode", "AUTO"),
+            "texel_density": float(getattr(props, "texel_density", 1024.0)),
+            "texture_size": int(getattr(props, "texture_size", 1024))}
 
 
 def add_properties(cls):
@@ -491,6 +531,11 @@ def draw_settings(layout, props) -> None:
     col.active = props.pack != "OFF"
     for key in PACK_SETTING_NAMES[1:]:
         col.prop(props, key)
+    layout.prop(props, "density_mode")
+    col = layout.column()
+    col.active = props.density_mode == "FIXED"
+    col.prop(props, "texel_density")
+    col.prop(props, "texture_size")
 
 
 def apply_defaults(props, defaults) -> list[str]:

@@ -13,7 +13,6 @@ mode) or for small selections it runs in one go.
 from __future__ import annotations
 
 import bpy
-import numpy as np
 
 from . import distortion, engine, mesh_io, methods
 
@@ -156,7 +155,8 @@ class UV_OT_uvflat_unwrap(bpy.types.Operator):
 
 
 class UV_OT_uvflat_select_flipped(bpy.types.Operator):
-    """Select exactly the faces the last unwraps left flipped (or with zero UV area)"""
+    """Select exactly the faces whose UVs are flipped (or have zero UV area) in the active UV
+    map, as uvflat's reports count them"""
 
     bl_idname = "uv.uvflat_select_flipped"
     bl_label = "Select Flipped Faces"
@@ -172,14 +172,22 @@ class UV_OT_uvflat_select_flipped(bpy.types.Operator):
     def execute(self, context):
         in_mode = [o for o in context.objects_in_mode if o.type == "MESH"]
         active = context.active_object if context.active_object in in_mode else in_mode[0]
+        try:
+            uvflat = engine.import_core()
+        except engine.UnwrapError as ex:
+            self.report({"ERROR"}, f"uvflat: {ex}")
+            return {"CANCELLED"}
         engine._leave_edit_mode(in_mode)
         count = 0
         try:
             for obj in {o.data.name: o for o in in_mode}.values():
-                flipped = mesh_io.read_attribute(obj.data, distortion.FLIPPED)
-                if flipped is None or len(flipped) != len(obj.data.polygons):
-                    flipped = np.zeros(len(obj.data.polygons), dtype=bool)
-                flipped = flipped & ~mesh_io.read_hidden_faces(obj.data)
+                # the active UV map measured by the core, as a report counts flips
+                try:
+                    flipped = distortion.flipped_faces(uvflat, obj.data)
+                except uvflat.UvflatError as ex:
+                    self.report({"ERROR"}, f"uvflat: {obj.name}: {ex}")
+                    return {"CANCELLED"}
+                flipped &= ~mesh_io.read_hidden_faces(obj.data)
                 mesh_io.select_faces(obj.data, flipped)
                 count += int(flipped.sum())
         finally:

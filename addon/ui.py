@@ -134,6 +134,11 @@ def _fmt(x):
     return "-" if x != x else ("inf" if x == float("inf") else f"{x:.3f}")
 
 
+def _fmt_density(x):
+    """Pixels per metre, to four significant digits (``-`` where not measured)."""
+    return "-" if not x == x or x in (float("inf"), float("-inf")) else f"{x:.4g}"
+
+
 class UVFLAT_PT_result(bpy.types.Panel):
     bl_label = "Last Unwrap"
     bl_space_type = "IMAGE_EDITOR"
@@ -168,9 +173,14 @@ class UVFLAT_PT_result(bpy.types.Panel):
             box.label(text=f"{summary.non_manifold_edges} non-manifold edges cut as seams",
                       icon="ERROR")
         rows = engine.chart_rows(summary)
-        grid = box.grid_flow(row_major=True, columns=8, even_columns=False, align=True)
+        if summary.density == "FIXED":
+            box.label(text=f"Texel density {summary.texel_density:g} px/m at "
+                           f"{summary.texture_size} px"
+                           + (": islands larger than their tile" if summary.density_overflow
+                              else ""), icon="ERROR" if summary.density_overflow else "NONE")
+        grid = box.grid_flow(row_major=True, columns=9, even_columns=False, align=True)
         for heading in ("Chart", "Method", "Faces", "Flips", "Overlap", "Conformal", "Area",
-                        "Time"):
+                        f"px/m ({summary.texture_size})", "Time"):
             grid.label(text=heading)
         for r in rows[:CHART_ROWS]:
             grid.label(text=f"{r['object']}:{r['chart']}",
@@ -181,6 +191,7 @@ class UVFLAT_PT_result(bpy.types.Panel):
             grid.label(text="yes" if r["overlap"] else "no")
             grid.label(text=_fmt(r["conformal"]))
             grid.label(text=_fmt(r["area"]))
+            grid.label(text=_fmt_density(r["density"]))
             grid.label(text=f"{r['seconds']:.3f}")
         reasons = [r for r in rows[:CHART_ROWS] if r["reason"]]
         for r in reasons:

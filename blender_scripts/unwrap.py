@@ -162,6 +162,13 @@ def parse_args(argv):
                              "map; all: over the whole tile; off: fit them to the previous UVs "
                              "(default around)")
     parser.add_argument("--no-pack", action="store_true", help="same as --pack off")
+    parser.add_argument("--texel-density", type=float, default=None, metavar="PX_PER_M",
+                        help="texture pixels per metre of surface of the new islands, on a "
+                             "texture of --texture-size pixels (packed without scaling: islands "
+                             "may not fit in the tile); default: as the packing does it")
+    parser.add_argument("--texture-size", type=int, default=None, metavar="PX",
+                        help="texture size in pixels of --texel-density (default 1024) and of "
+                             "the per-island densities of --report")
     parser.add_argument("--margin", type=float, default=0.001, help="packing margin")
     parser.add_argument("--margin-method", choices=("scaled", "add", "fraction"),
                         default="scaled", help="packing margin method")
@@ -375,6 +382,15 @@ def check_args(args, methods, core_methods):
                   "shape_method": args.shape_method.upper(), "rotate": not args.no_rotate,
                   "correct_aspect": not args.no_correct_aspect}
     defaults = methods.common_properties()
+    if args.texel_density is not None:
+        if not (math.isfinite(args.texel_density) and args.texel_density > 0):
+            raise UsageError(f"--texel-density {args.texel_density}: must be a positive number "
+                             "of pixels per metre")
+        _check_range("--texel-density", args.texel_density, defaults["texel_density"])
+        pack_props.update(density_mode="FIXED", texel_density=args.texel_density)
+    if args.texture_size is not None:
+        _check_range("--texture-size", args.texture_size, defaults["texture_size"])
+        pack_props["texture_size"] = args.texture_size
     if not math.isfinite(args.margin):
         raise UsageError(f"--margin {args.margin}: must be a finite number")
     _check_range("--margin", args.margin, defaults["margin"])
@@ -466,6 +482,16 @@ class ProgressBar:
 def fail(message) -> int:
     print(f"unwrap.py: error: {message}", file=sys.stderr, flush=True)
     return 1
+
+
+def _json_number(value):
+    """A float as a JSON value (NaN and infinity as strings)."""
+    value = float(value)
+    if value != value:
+        return "nan"
+    if value in (float("inf"), float("-inf")):
+        return "inf" if value > 0 else "-inf"
+    return value
 
 
 def chart_report(chart):
@@ -614,7 +640,11 @@ def run_single(args, addon, method_props, pack_props) -> int:
             "status": "charts failed" if status else "ok", "seconds": time.perf_counter() - started,
             "summary": summary.line(), "non_manifold_edges": summary.non_manifold_edges,
             "repairs": repairs,
-            "objects": {name: [chart_report(c) for c in r.charts]
+            "texture_size": summary.texture_size,
+            "objects": {name: [dict(chart_report(c), texel_density=_json_number(
+                               summary.texture_size * summary.chart_density[name][c.id])
+                               if name in summary.chart_density else "nan")
+                               for c in r.charts]
                         for name, r in summary.results.items()},
         }
         try:

@@ -403,7 +403,8 @@ def test_failed_chart_keeps_uvs_exactly(ext, scene, monkeypatch):
         return SimpleNamespace(uv=np.asarray(r.uv), chart=chart, face_solved=solved,
                                charts=charts, seconds=r.seconds,
                                face_conformal=np.where(failed, np.nan, r.face_conformal),
-                               face_area=np.where(failed, np.nan, r.face_area))
+                               face_area=np.where(failed, np.nan, r.face_area),
+                               face_flips=np.where(failed, 0, r.face_flips))
 
     monkeypatch.setattr(uvflat, "unwrap", unwrap_with_failure)
     obj = suzanne()
@@ -545,6 +546,51 @@ def test_scene_defaults_panel_properties(ext, scene):
     names = ext.methods.SETTING_NAMES
     assert {"method", "pack", "margin", "boundary", "max_iterations"} <= set(names)
     assert ext.methods.core_options(defaults) == {"max_iterations": 321, "tolerance": 1e-10}
+
+
+def test_texel_density_settings_go_from_the_sidebar_to_the_unwrap(ext, scene):
+    """The sidebar's Texel Density (declared once with the other shared settings) is drawn in
+    the redo panel and the sidebar, copied into the operator when it is invoked, and reaches
+    the packing: Fixed 256 px/m at 2048 px is 1/8 UV unit per metre."""
+    defaults = bpy.context.scene.uvflat
+    names = ("density_mode", "texel_density", "texture_size")
+    assert set(names) <= set(ext.methods.SETTING_NAMES)
+    drawn = []
+    layout = SimpleNamespace(prop=lambda _props, name, **_kw: drawn.append(name),
+                             column=lambda: layout, use_property_split=True,
+                             use_property_decorate=False,
+                             prop_search=lambda _p, name, *_a: drawn.append(name))
+    ext.methods.draw_settings(layout, defaults)
+    assert set(names) <= set(drawn)
+    defaults.density_mode, defaults.texel_density, defaults.texture_size = "FIXED", 256.0, 2048
+    defaults.shape_method = "AABB"  # packs in a millisecond: the unwrap runs in one go
+    try:
+        settings = ext.engine.PackSettings(**ext.methods.pack_settings(defaults))
+        assert (settings.density, settings.texel_density, settings.texture_size) == \
+            ("FIXED", 256.0, 2048)
+        assert settings.uv_per_metre == 1 / 8
+        # invoke copies the sidebar's values into the operator (headless Blender runs no
+        # invoke from bpy.ops, so it is called on a stand-in of the operator's properties,
+        # as test_invoke_keeps_the_properties_the_caller_set does), which then runs with them
+        props = _Props(dict.fromkeys(ext.methods.SETTING_NAMES), set())
+        ran = []
+        stand_in = SimpleNamespace(properties=props,
+                                   execute=lambda ctx: ran.append(ctx) or {"FINISHED"})
+        assert ext.operators.UV_OT_uvflat_unwrap.invoke(stand_in, bpy.context, None) == \
+            {"FINISHED"} and ran
+        assert (props.density_mode, props.texel_density, props.texture_size) == \
+            ("FIXED", 256.0, 2048)
+        obj = suzanne()
+        result, summary = unwrap(ext, [obj], **{n: getattr(props, n) for n in names},
+                                 shape_method=props.shape_method)
+        assert result == {"FINISHED"}, summary
+        assert summary.density == "FIXED" and summary.texture_size == 2048
+        rows = ext.engine.chart_rows(summary)
+        assert rows and all(r["density"] == pytest.approx(256.0, rel=0.02) for r in rows
+                            if r["status"] != "failed")
+    finally:
+        for name in names + ("shape_method",):
+            defaults.property_unset(name)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -1161,30 +1207,52 @@ def test_heat_colors_scale(ext):
     np.testing.assert_allclose(rgba[2, :3], dist._RGB[-1])
     np.testing.assert_allclose(rgba[3, :3], dist._RGB[-1])
     np.testing.assert_allclose(rgba[4, :3], 0.5)
-    # flips: a square of two triangles, one of them mirrored in UV
-    uv = np.array([[0, 0], [1, 0], [1, 1], [0, 0], [1, 1], [1, 0]], float)
-    flipped = dist.flipped_faces(uv, [3, 3], [0, 0], [True, True])
-    assert flipped.sum() == 1
-    uv[3:] = [[0, 0], [1, 1], [2, 2]]  # zero UV area counts as flipped
-    assert dist.flipped_faces(uv, [3, 3], [0, 0], [True, True]).tolist() == [False, True]
 
 
-def test_select_flipped_selects_exactly_the_flipped_faces(ext, scene):
-    obj = suzanne()
+def test_select_flipped_measures_the_existing_map(ext, scene):
+    """Select Flipped asks the core about the active UV map as it is, one uvflat never made:
+    a 3 x 3 quad grid mapped flat, with two inner vertices moved deep into a corner quad each,
+    folds exactly those two quads (darts, reflex at the moved vertex; the quads around them
+    stay convex). Hidden faces are never selected."""
     io = ext.mesh_io
-    result, _ = unwrap(ext, [obj], method="tutte", pack="OFF")
-    assert result == {"FINISHED"}
-    assert not io.read_attribute(obj.data, "uvflat_flipped").any(), "Tutte never flips"
-    marked = np.zeros(len(obj.data.polygons), dtype=bool)
-    marked[[3, 17, 200]] = True
-    io.write_attribute(obj.data, "uvflat_flipped", "FACE", "BOOLEAN", marked)
-    common.edit_mode([obj])
+    n = 3
+    xs, ys = np.meshgrid(np.arange(n + 1.0), np.arange(n + 1.0), indexing="xy")
+    positions = np.column_stack([xs.ravel(), ys.ravel(), np.zeros(xs.size)])
+    vid = lambda i, j: j * (n + 1) + i  # noqa: E731
+    corner_verts = np.array([[vid(i, j), vid(i + 1, j), vid(i + 1, j + 1), vid(i, j + 1)]
+                             for j in range(n) for i in range(n)]).ravel()
+    obj = common.link_mesh_object("Folded", io.new_mesh("Folded", positions, corner_verts,
+                                                         np.full(n * n, 4)))
+    name, _ = io.ensure_uv_map(obj.data)
+    uv = positions[corner_verts, :2].copy()
+    uv[corner_verts == vid(1, 1)] = [0.2, 0.2]  # into quad 0
+    uv[corner_verts == vid(2, 2)] = [2.8, 2.8]  # into quad 8
+    io.write_uv(obj.data, name, uv)
+    assert io.read_attribute(obj.data, "uvflat_flipped") is None, "never unwrapped by uvflat"
+    # independently of the core: the quads that are not strictly convex in UV (all four
+    # triangles of both diagonal splits counter-clockwise)
+    c = np.arange(4 * n * n).reshape(-1, 4)
+    uv_read = read(ext, obj).uv
+    convex = np.ones(n * n, dtype=bool)
+    for a, b, d in ((0, 1, 2), (0, 2, 3), (0, 1, 3), (1, 2, 3)):
+        convex &= _signed(uv_read, c[:, a], c[:, b], c[:, d]) > 0
+    assert np.flatnonzero(~convex).tolist() == [0, 8]
+    common.edit_mode([obj], select_all=False)
     try:
         assert bpy.ops.uv.uvflat_select_flipped() == {"FINISHED"}
         assert obj.mode == "EDIT"
     finally:
         common.object_mode()
-    np.testing.assert_array_equal(io.read_face_selection(obj.data), marked)
+    assert np.flatnonzero(io.read_face_selection(obj.data)).tolist() == [0, 8]
+    hidden = np.zeros(n * n, dtype=bool)
+    hidden[8] = True
+    obj.data.polygons.foreach_set("hide", hidden)
+    common.edit_mode([obj], select_all=False)
+    try:
+        assert bpy.ops.uv.uvflat_select_flipped() == {"FINISHED"}
+    finally:
+        common.object_mode()
+    assert np.flatnonzero(io.read_face_selection(obj.data, include_hidden=True)).tolist() == [0]
 
 
 def test_heat_map_toggle_sets_and_restores_the_viewport(ext, scene):

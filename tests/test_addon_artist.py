@@ -171,8 +171,12 @@ def test_select_flipped_selects_the_faces_the_report_counts(ext, scene):
 # 3. Packing around existing islands: texel density and UDIM tiles
 
 
-@pytest.mark.parametrize("faces_of", ["patch", "scattered"])
-def test_pack_around_keeps_the_texel_density_of_the_map(ext, scene, faces_of):
+@pytest.mark.parametrize("faces_of,pack,density_mode", [
+    ("patch", "AROUND", "AUTO"), ("scattered", "AROUND", "AUTO"),
+    # Match Existing: the density of the islands left alone whatever the packing
+    ("patch", "ALL", "MATCH"), ("scattered", "OFF", "MATCH")])
+def test_pack_around_keeps_the_texel_density_of_the_map(ext, scene, faces_of, pack,
+                                                        density_mode):
     obj = suzanne()
     io = ext.mesh_io
     shrink_existing_map(obj)
@@ -181,8 +185,11 @@ def test_pack_around_keeps_the_texel_density_of_the_map(ext, scene, faces_of):
     before = read(ext, obj)
     area3, area_uv = face_areas(obj, before.uv)
     rest = density(area3, area_uv, ~sel)
-    result, summary = unwrap(ext, [obj], select_all=False, method="abf", pack="AROUND")
+    result, summary = unwrap(ext, [obj], select_all=False, method="abf", pack=pack,
+                             density_mode=density_mode)
     assert result == {"FINISHED"}, summary
+    if density_mode == "MATCH":
+        assert summary.density == "MATCH" and "density of the islands left alone" in summary.line()
     after = read(ext, obj)
     kept = corner_mask(~sel, before.face_sizes)
     assert np.array_equal(after.uv[kept], before.uv[kept]), "the islands left alone moved"
@@ -191,12 +198,60 @@ def test_pack_around_keeps_the_texel_density_of_the_map(ext, scene, faces_of):
     assert density(area3, new_area_uv, sel) == pytest.approx(rest, rel=0.05), summary.line()
     for k, faces in islands_of(summary, obj, sel).items():
         assert density(area3, new_area_uv, faces) == pytest.approx(rest, rel=0.05), f"island {k}"
+    if pack != "AROUND":
+        return
     # packed into free space of the tile, over none of the islands left alone
     new = corner_mask(sel, after.face_sizes)
     assert after.uv[new].min() >= -1e-6 and after.uv[new].max() <= 1 + 1e-6
     old_cells = raster(after.uv, after.face_sizes, ~sel, 0.0, 1.0)
     new_cells = raster(after.uv, after.face_sizes, sel, 0.0, 1.0)
     assert new_cells.any() and not (old_cells & new_cells).any()
+
+
+@pytest.mark.parametrize("pack", ["AROUND", "ALL", "OFF"])
+def test_fixed_texel_density_gives_every_island_the_pixels_per_metre(ext, scene, pack):
+    """Fixed: 1 m of (world) surface covers 300 px of a 1024 px texture, on every island
+    whatever the packing, on an object scaled by 1.5 (so its world surface is 2.25 times its
+    mesh's); the chart list shows each island's px/m."""
+    obj = suzanne()
+    obj.scale = (1.5, 1.5, 1.5)
+    bpy.context.view_layer.update()
+    io = ext.mesh_io
+    shrink_existing_map(obj)
+    sel = patch(obj, 60)
+    io.select_faces(obj.data, sel)
+    result, summary = unwrap(ext, [obj], select_all=False, method="abf", pack=pack,
+                             density_mode="FIXED", texel_density=300.0, texture_size=1024)
+    assert result == {"FINISHED"}, summary
+    after = read(ext, obj)
+    area3, area_uv = face_areas(obj, after.uv)
+    area3 = area3 * 1.5 ** 2  # world square metres
+    islands = islands_of(summary, obj, sel)
+    assert islands
+    rows = {r["chart"]: r for r in ext.engine.chart_rows(summary)}
+    for k, faces in islands.items():
+        measured = density(area3, area_uv, faces) * 1024
+        assert measured == pytest.approx(300.0, rel=0.02), f"island {k}: {measured:.1f} px/m"
+        assert rows[k]["density"] == pytest.approx(measured, rel=1e-3)
+    assert summary.density == "FIXED"
+    assert "texel density 300 px/m at 1024 px" in summary.line()
+    assert not summary.density_overflow, summary.line()
+
+
+def test_fixed_texel_density_says_when_islands_exceed_the_tile(ext, scene):
+    obj = suzanne()
+    io = ext.mesh_io
+    result, summary = unwrap(ext, [obj], method="abf", pack="ALL", density_mode="FIXED",
+                             texel_density=4096.0, texture_size=512)
+    assert result == {"FINISHED"}, summary
+    after = read(ext, obj)
+    area3, area_uv = face_areas(obj, after.uv)
+    solved = np.asarray(summary.results[obj.name].face_solved, dtype=bool)
+    assert density(area3, area_uv, solved) * 512 == pytest.approx(4096.0, rel=0.02)
+    assert np.ptp(after.uv, axis=0).max() > 1.0, "8 UV units per metre cannot fit in a tile"
+    assert summary.density_overflow
+    assert "islands larger than their tile" in summary.line()
+    assert io.active_uv_name(obj.data) is not None
 
 
 @pytest.mark.parametrize("pack", ["AROUND", "ALL"])
@@ -365,7 +420,9 @@ def test_seams_of_a_failed_chart_are_not_marked(ext, scene, monkeypatch):
         return SimpleNamespace(uv=np.asarray(r.uv), chart=np.asarray(r.chart), face_solved=failed,
                                charts=charts, seconds=r.seconds, new_seams=np.asarray(r.new_seams),
                                face_conformal=np.full(len(failed), np.nan),
-                               face_area=np.full(len(failed), np.nan), non_manifold_edges=0)
+                               face_area=np.full(len(failed), np.nan),
+                               face_flips=np.zeros(len(failed), dtype=np.uint32),
+                               non_manifold_edges=0)
 
     io = ext.mesh_io
     bpy.ops.mesh.primitive_uv_sphere_add(segments=16, ring_count=8)

@@ -614,6 +614,61 @@ def test_metrics_counts_one_flipped_triangle():
     assert m.flips == 1
 
 
+def test_metrics_face_flips_name_the_flipped_faces():
+    # The triangle grid with vertex 0 moved across the edge (1, 4): the one face holding it.
+    pos, cv, fs = grid(3, 3, triangles=True)
+    uv = identity_uv(pos, cv)
+    uv[cv == 0] = [0.6, 0.6]
+    m = uvflat.metrics(pos, cv, fs, uv)
+    assert m.face_flips.dtype == np.uint32 and m.face_flips.shape == (len(fs),)
+    face_of_vertex_0 = np.repeat(np.arange(len(fs)), fs)[np.flatnonzero(cv == 0)[0]]
+    assert np.flatnonzero(m.face_flips).tolist() == [face_of_vertex_0]
+    assert m.face_flips.sum() == m.flips == 1
+    # A 2 x 2 quad grid whose middle vertex moves deep into quad 0 (vertices 0, 1, 4, 3): that
+    # quad becomes a dart, reflex at the vertex, folded on one diagonal split (one flip); the
+    # other three stay convex.
+    pos, cv, fs = grid(2, 2)
+    uv = identity_uv(pos, cv)
+    uv[cv == 4] = [0.2, 0.2]
+    m = uvflat.metrics(pos, cv, fs, uv)
+    assert m.face_flips.tolist() == [1, 0, 0, 0]
+    assert m.flips == 1
+    # Only measured faces hold flips.
+    m = uvflat.metrics(pos, cv, fs, uv, selected=[False, True, True, True])
+    assert m.face_flips.tolist() == [0, 0, 0, 0] and m.flips == 0
+    assert "face_flips" in m.as_dict()
+
+
+def test_unwrap_face_flips_sum_to_the_reports():
+    # Every corner pinned at its position except vertex 0, pinned across the edge (1, 4): the
+    # pins force the fold of the one triangle holding vertex 0 (automatic seams off, so the
+    # chart is reported invalid with its UVs).
+    pos, cv, fs = grid(3, 3, triangles=True)
+    uv = identity_uv(pos, cv)
+    uv[cv == 0] = [0.6, 0.6]
+    r = uvflat.unwrap(pos, cv, fs, method="lscm", pins=np.arange(len(cv)), pin_uvs=uv,
+                      auto_seams=False)
+    assert r.face_flips.dtype == np.uint32 and r.face_flips.shape == (len(fs),)
+    face_of_vertex_0 = np.repeat(np.arange(len(fs)), fs)[np.flatnonzero(cv == 0)[0]]
+    assert np.flatnonzero(r.face_flips).tolist() == [face_of_vertex_0]
+    assert r.face_flips.sum() == sum(c.flips for c in r.charts) == 1
+    assert "face_flips" in r.as_dict()
+    # A curved quad mesh LSCM folds: the per-face counts sum to every chart's report and agree
+    # with measuring the returned UVs.
+    pos, cv, fs = grid(8, 8)
+    rng = np.random.default_rng(3)
+    pos[:, :2] += rng.uniform(-0.35, 0.35, (len(pos), 2))
+    pos[:, 2] = 0.8 * np.sin(pos[:, 0]) * np.cos(pos[:, 1])
+    for method in ("lscm", "abf"):
+        r = uvflat.unwrap(pos, cv, fs, method=method)
+        chart = np.asarray(r.chart)
+        for report in r.charts:
+            assert r.face_flips[chart == report.id].sum() == report.flips
+        assert r.face_flips.sum() == sum(c.flips for c in r.charts)
+        m = uvflat.metrics(pos, cv, fs, r.uv)
+        assert m.face_flips.sum() == m.flips == r.face_flips.sum()
+
+
 def test_metrics_stretch_by_two():
     pos, cv, fs = grid(3, 2, triangles=True)
     uv = identity_uv(pos, cv)

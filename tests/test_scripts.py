@@ -53,6 +53,49 @@ def test_batch_unwrap_writes_uvs_and_a_layout(tmp_path, method, extra):
     assert (tmp_path / "out_uv.png").stat().st_size > 0
 
 
+def _obj_density(path: Path):
+    """sqrt(UV area / surface area) of every face of an OBJ file written with UVs (each face
+    as a fan from its first corner), as (surface area, UV area) per face."""
+    lines = path.read_text().splitlines()
+    v = np.array([ln.split()[1:4] for ln in lines if ln.startswith("v ")], dtype=float)
+    vt = np.array([ln.split()[1:3] for ln in lines if ln.startswith("vt ")], dtype=float)
+    area3, area_uv = [], []
+    for ln in lines:
+        if not ln.startswith("f "):
+            continue
+        corners = [tok.split("/") for tok in ln.split()[1:]]
+        p = v[[int(c[0]) - 1 for c in corners]]
+        q = vt[[int(c[1]) - 1 for c in corners]]
+        a3 = sum(0.5 * np.linalg.norm(np.cross(p[k] - p[0], p[k + 1] - p[0]))
+                 for k in range(1, len(p) - 1))
+        a2 = sum(0.5 * abs((q[k, 0] - q[0, 0]) * (q[k + 1, 1] - q[0, 1])
+                           - (q[k, 1] - q[0, 1]) * (q[k + 1, 0] - q[0, 0]))
+                 for k in range(1, len(q) - 1))
+        area3.append(a3)
+        area_uv.append(a2)
+    return np.array(area3), np.array(area_uv)
+
+
+@pytest.mark.parametrize("pack", ["around", "off"])
+def test_batch_texel_density_gives_the_pixels_per_metre(tmp_path, pack):
+    """--texel-density 150 --texture-size 512: every face of the output gets 150 px per metre
+    of a 512 px texture (the 6 m grid then spans more than the tile, which the summary says),
+    and --report lists each island's density."""
+    src, out, report = tmp_path / "grid.obj", tmp_path / "out.obj", tmp_path / "report.json"
+    _grid_obj(src)
+    r = _run(src, out, "--method", "abf", "--pack", pack, "--texel-density", "150",
+             "--texture-size", "512", "--report", report)
+    assert r.returncode == 0, r.stdout + r.stderr
+    area3, area_uv = _obj_density(out)
+    assert len(area3) == 36
+    assert np.sqrt(area_uv.sum() / area3.sum()) * 512 == pytest.approx(150.0, rel=0.02)
+    assert "texel density 150 px/m at 512 px: islands larger than their tile" in r.stdout
+    data = json.loads(report.read_text())
+    assert data["texture_size"] == 512
+    charts = [c for charts in data["objects"].values() for c in charts]
+    assert charts and all(c["texel_density"] == pytest.approx(150.0, rel=0.02) for c in charts)
+
+
 def test_batch_unwrap_refuses_an_option_the_method_does_not_take(tmp_path):
     src = tmp_path / "grid.obj"
     _grid_obj(src)
@@ -311,6 +354,14 @@ def _one_line_error(r, *needles):
     (["--max-iterations", "1000000000000", "--method", "slim"], "--max-iterations"),
     (["--max-iterations", "1000000000000", "--method", "spectral"], "--max-iterations"),
     (["--max-iterations", "2147483648", "--method", "abf"], "--max-iterations"),
+    (["--texel-density", "0"], "--texel-density"),
+    (["--texel-density", "-300"], "--texel-density"),
+    (["--texel-density", "nan"], "--texel-density"),
+    (["--texel-density", "inf"], "--texel-density"),
+    (["--texel-density", "many"], "--texel-density"),
+    (["--texel-density", "300", "--texture-size", "0"], "--texture-size"),
+    (["--texel-density", "300", "--texture-size", "1e3"], "--texture-size"),
+    (["--texture-size", "100000"], "--texture-size"),
 ])
 def test_batch_unwrap_rejects_bad_arguments_before_writing(tmp_path, args, needle):
     src, out = tmp_path / "grid.obj", tmp_path / "out.obj"

@@ -94,6 +94,11 @@ pub struct Unwrapped {
     /// triangles, the chart's UVs area-normalised); NaN elsewhere. Measured on the returned
     /// UVs, so a caller needs no second pass to colour faces by quality.
     pub face_distortion: Vec<[f64; 2]>,
+    /// Flipped or zero-area UV triangles of every face, as its chart's report counts them
+    /// ([`crate::metrics::face_flips`]: Blender's render triangles, a quad counting the flips
+    /// of its worse diagonal split); 0 for faces without UVs. Each report's `flips` is the sum
+    /// over its chart's faces.
+    pub face_flips: Vec<u32>,
     /// Seconds per pipeline step and the repair counts.
     pub phases: Phases,
 }
@@ -185,6 +190,7 @@ pub fn unwrap(input: &MeshInput<'_>, options: &UnwrapOptions) -> Result<Unwrappe
 
     let mut uv = vec![[0.0, 0.0]; n_corners];
     let mut face_chart = vec![-1i32; mesh.n_faces()];
+    let mut face_flips = vec![0u32; mesh.n_faces()];
     let mut reports = Vec::with_capacity(charts.len());
     let mut new_seams = Vec::new();
     for (original, list) in charts.iter().zip(pieces) {
@@ -194,6 +200,9 @@ pub fn unwrap(input: &MeshInput<'_>, options: &UnwrapOptions) -> Result<Unwrappe
             report.id = reports.len();
             for &f in &chart.faces {
                 face_chart[f as usize] = report.id as i32;
+            }
+            for (&f, &n) in chart.faces.iter().zip(&piece.face_flips) {
+                face_flips[f as usize] = n;
             }
             if let Some(vuv) = piece.uv {
                 for &(c, v) in chart.corner_vertex.iter() {
@@ -206,7 +215,7 @@ pub fn unwrap(input: &MeshInput<'_>, options: &UnwrapOptions) -> Result<Unwrappe
     }
     new_seams.sort_unstable();
     new_seams.dedup();
-    Ok(Unwrapped { uv, face_chart, charts: reports, new_seams, non_manifold_edges, face_distortion, phases: ctx.clock.get() })
+    Ok(Unwrapped { uv, face_chart, charts: reports, new_seams, non_manifold_edges, face_distortion, face_flips, phases: ctx.clock.get() })
 }
 
 

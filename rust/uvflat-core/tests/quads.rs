@@ -6,62 +6,6 @@ mod common;
 use uvflat_core::metrics::{measure, measure_with_triangles};
 use uvflat_core::{unwrap, Method, MeshInput, OptionValue, UnwrapOptions, UvError};
 
-/// Small deterministic generator (xorshift), uniform in [0, 1).
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
-/// A noisy, curved quad grid (a saddle with bumps and some dart-shaped quads), `n × n` quads, and random seams
-/// that cut it into charts (random walks along grid edges from the border).
-fn curved_quad_grid(n: usize, seed: u64) -> (common::Soup, Vec<[u32; 2]>) {
-    let mut rng = Rng(seed);
-    let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
-    let mut positions = Vec::new();
-    for j in 0..=n {
-        for i in 0..=n {
-            let (x, y) = (i as f64 / n as f64 * 2.0 - 1.0, j as f64 / n as f64 * 2.0 - 1.0);
-            let h = 2.0 / n as f64;
-            let (mut jx, mut jy) = (0.3 * h * (rng.next() - 0.5), 0.3 * h * (rng.next() - 0.5));
-            // Every few interior vertices move 0.6 of the way along their quad's diagonal:
-            // that quad becomes a dart (concave in 3D, convex only by moving it in UV), so
-            // a faithful map folds it on one diagonal.
-            if i > 0 && j > 0 && i < n - 1 && j < n - 1 && (7 * i + 3 * j) % 11 == 0 {
-                jx = 0.6 * h;
-                jy = 0.6 * h;
-            }
-            let z = 0.6 * (x * x - y * y) + 0.2 * (3.0 * x).sin() * (2.0 * y).cos();
-            positions.push([x + jx, y + jy, z]);
-        }
-    }
-    let mut corner_verts = Vec::new();
-    let mut face_sizes = Vec::new();
-    for j in 0..n {
-        for i in 0..n {
-            corner_verts.extend([id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)]);
-            face_sizes.push(4);
-        }
-    }
-    let mut seams = Vec::new();
-    for w in 0..4 {
-        let (mut i, mut j) = if w % 2 == 0 { (0, (rng.next() * n as f64) as usize) } else { ((rng.next() * n as f64) as usize, 0) };
-        for _ in 0..n {
-            let (ni, nj) = if rng.next() < 0.5 { ((i + 1).min(n), j) } else { (i, (j + 1).min(n)) };
-            if (ni, nj) == (i, j) {
-                break;
-            }
-            seams.push([id(i, j), id(ni, nj)]);
-            (i, j) = (ni, nj);
-        }
-    }
-    (common::Soup { positions, corner_verts, face_sizes }, seams)
-}
-
 /// Quads that are not strictly convex in UV (either orientation of the chart counts as the
 /// right one: the chart's majority sign), computed here from per-corner UVs, independently
 /// of the crate's metrics.
@@ -141,7 +85,7 @@ fn a_pentagon_is_measured_on_the_given_triangles() {
 
 #[test]
 fn bad_render_triangles_are_typed_errors_naming_the_triple() {
-    let (soup, _) = curved_quad_grid(2, 7);
+    let (soup, _) = common::curved_quad_grid(2, 7);
     let ok: Vec<[u32; 3]> = (0..4u32).flat_map(|f| [[4 * f, 4 * f + 1, 4 * f + 2], [4 * f, 4 * f + 2, 4 * f + 3]]).collect();
     let go = |t: &[[u32; 3]]| unwrap(&MeshInput { triangles: t, ..soup.input() }, &UnwrapOptions::default());
     assert!(go(&ok).is_ok());
@@ -157,7 +101,7 @@ fn bad_render_triangles_are_typed_errors_naming_the_triple() {
 
 #[test]
 fn promising_methods_keep_every_quad_strictly_convex() {
-    let (soup, seams) = curved_quad_grid(24, 0x9e37_79b9_7f4a_7c15);
+    let (soup, seams) = common::curved_quad_grid(24, 0x9e37_79b9_7f4a_7c15);
     // The surface is hard enough that LSCM (which promises nothing) folds quads on one
     // diagonal, so the check below can fail.
     let lscm = run(&soup, &seams, "lscm");
@@ -179,7 +123,7 @@ fn promising_methods_keep_every_quad_strictly_convex() {
 
 #[test]
 fn the_render_split_is_used_and_methods_stay_convex_under_it() {
-    let (soup, seams) = curved_quad_grid(12, 42);
+    let (soup, seams) = common::curved_quad_grid(12, 42);
     // Split every quad along the diagonal the core would not necessarily pick: 1-3.
     let tris: Vec<[u32; 3]> = (0..soup.face_sizes.len() as u32).flat_map(|f| [[4 * f, 4 * f + 1, 4 * f + 3], [4 * f + 1, 4 * f + 2, 4 * f + 3]]).collect();
     for method in ["mean_value", "slim", "mips"] {
@@ -194,7 +138,7 @@ fn the_render_split_is_used_and_methods_stay_convex_under_it() {
 
 #[test]
 fn abf_repairs_its_few_non_convex_quads_in_place() {
-    let (soup, seams) = curved_quad_grid(24, 0x9e37_79b9_7f4a_7c15);
+    let (soup, seams) = common::curved_quad_grid(24, 0x9e37_79b9_7f4a_7c15);
     let r = run(&soup, &seams, "abf");
     assert_eq!(nonconvex_quads(&soup, &r.uv, &r.face_chart), 0);
     for c in &r.charts {
@@ -207,47 +151,6 @@ fn abf_repairs_its_few_non_convex_quads_in_place() {
         "{:?}",
         r.charts.iter().map(|c| &c.reason).collect::<Vec<_>>()
     );
-}
-
-/// A brick wall of hexagons (pairs of grid quads merged, rows offset), noisy and curved, with
-/// some middle vertices pushed across their hexagon: concave n-gons in 3D.
-fn brick_hexagons(n: usize, seed: u64) -> common::Soup {
-    let mut rng = Rng(seed);
-    let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
-    let h = 2.0 / n as f64;
-    let mut positions = Vec::new();
-    for j in 0..=n {
-        for i in 0..=n {
-            let (mut x, mut y) = (i as f64 * h - 1.0, j as f64 * h - 1.0);
-            x += 0.3 * h * (rng.next() - 0.5);
-            y += 0.3 * h * (rng.next() - 0.5);
-            if i > 0 && j > 0 && i < n && j < n && (5 * i + 3 * j) % 7 == 0 {
-                y += 0.7 * h;
-            }
-            positions.push([x, y, 0.5 * (x * x - y * y) + 0.2 * (3.0 * x).sin()]);
-        }
-    }
-    let (mut corner_verts, mut face_sizes) = (Vec::new(), Vec::new());
-    for j in 0..n {
-        let mut i = 0;
-        if j % 2 == 1 {
-            corner_verts.extend([id(0, j), id(1, j), id(1, j + 1), id(0, j + 1)]);
-            face_sizes.push(4);
-            i = 1;
-        }
-        while i < n {
-            if i + 2 <= n {
-                corner_verts.extend([id(i, j), id(i + 1, j), id(i + 2, j), id(i + 2, j + 1), id(i + 1, j + 1), id(i, j + 1)]);
-                face_sizes.push(6);
-                i += 2;
-            } else {
-                corner_verts.extend([id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)]);
-                face_sizes.push(4);
-                i += 1;
-            }
-        }
-    }
-    common::Soup { positions, corner_verts, face_sizes }
 }
 
 /// Faces whose UV polygon is not strictly convex (some corner does not turn left, with the
@@ -277,7 +180,7 @@ fn nonconvex_faces(soup: &common::Soup, uv: &[[f64; 2]]) -> usize {
 
 #[test]
 fn barycentric_methods_make_every_ngon_convex() {
-    let soup = brick_hexagons(16, 0x2545_f491_4f6c_dd1d);
+    let soup = common::brick_hexagons(16, 0x2545_f491_4f6c_dd1d);
     let lscm = run(&soup, &[], "lscm");
     assert!(nonconvex_faces(&soup, &lscm.uv) > 0, "the test surface should give LSCM concave faces");
     for method in ["tutte", "mean_value"] {

@@ -451,6 +451,7 @@ fn unwrap(
         non_manifold_edges: result.non_manifold_edges,
         face_conformal: PyArray1::from_iter(py, result.face_distortion.iter().map(|d| d[0])).unbind(),
         face_area: PyArray1::from_iter(py, result.face_distortion.iter().map(|d| d[1])).unbind(),
+        face_flips: PyArray1::from_vec(py, result.face_flips).unbind(),
         phases: result.phases,
     })
 }

@@ -173,6 +173,7 @@ pub struct PyUnwrapResult {
     pub non_manifold_edges: usize,
     pub face_conformal: Py<PyArray1<f64>>,
     pub face_area: Py<PyArray1<f64>>,
+    pub face_flips: Py<PyArray1<u32>>,
     pub phases: uvflat_core::Phases,
 }
 
@@ -267,12 +268,22 @@ impl PyUnwrapResult {
         self.face_area.bind(py).clone()
     }
 
+    /// Flipped or zero-area UV triangles of every face, shape (F,), uint32, exactly as the
+    /// chart reports count them (Blender's render triangles when ``triangles`` was given; a
+    /// quad counts the flips of its worse diagonal split): each report's ``flips`` is the sum
+    /// over its faces, ``face_flips > 0`` marks the flipped faces. 0 for faces without UVs.
+    #[getter]
+    fn face_flips<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<u32>> {
+        self.face_flips.bind(py).clone()
+    }
+
     /// All fields as a plain dict (arrays included, reports as dicts).
     fn as_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);
         d.set_item("method", &self.method)?;
         d.set_item("face_conformal", self.face_conformal.bind(py))?;
         d.set_item("face_area", self.face_area.bind(py))?;
+        d.set_item("face_flips", self.face_flips.bind(py))?;
         d.set_item("uv", self.uv.bind(py))?;
         d.set_item("chart", self.chart.bind(py))?;
         d.set_item("face_solved", self.face_solved.bind(py))?;
@@ -334,6 +345,7 @@ pub struct PyMetrics {
     density: DensitySpread,
     per_chart: Vec<ChartMetrics>,
     per_face: Vec<[f64; 2]>,
+    face_flips: Vec<u32>,
 }
 
 impl From<MeshMetrics> for PyMetrics {
@@ -346,6 +358,7 @@ impl From<MeshMetrics> for PyMetrics {
             density: m.density,
             per_chart: m.per_chart,
             per_face: m.per_face,
+            face_flips: m.face_flips,
         }
     }
 }
@@ -429,6 +442,13 @@ impl PyMetrics {
     fn face_area<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         PyArray1::from_vec(py, self.per_face.iter().map(|d| d[1]).collect())
     }
+    /// Flipped or zero-area UV triangles of every face, shape (F,), uint32, counted as
+    /// `flips` counts them (its sum); 0 for faces not measured. ``face_flips > 0`` are the
+    /// flipped faces.
+    #[getter]
+    fn face_flips<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<u32>> {
+        PyArray1::from_slice(py, &self.face_flips)
+    }
     /// All fields as a plain dict.
     fn as_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);
@@ -440,6 +460,7 @@ impl PyMetrics {
         d.set_item("per_chart", self.per_chart(py)?)?;
         d.set_item("face_conformal", self.face_conformal(py))?;
         d.set_item("face_area", self.face_area(py))?;
+        d.set_item("face_flips", self.face_flips(py))?;
         Ok(d)
     }
     fn __repr__(&self) -> String {

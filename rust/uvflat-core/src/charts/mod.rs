@@ -70,6 +70,8 @@ pub struct Chart {
     /// keep the core's own split because a render diagonal is already an edge of the chart:
     /// not solved on, but measured, so a fold on what Blender shows is counted as a flip.
     pub shown: Vec<[u32; 3]>,
+    /// Input face of every [`Chart::shown`] triangle.
+    pub shown_face: Vec<u32>,
     /// Faces of four or more corners as polygons (quads included, with the same exception):
     /// the polygon graph of the barycentric methods, on which faces come out convex.
     pub polygons: Vec<Polygon>,
@@ -247,6 +249,7 @@ impl Chart {
         let n = self.positions.len() as u32;
         assert_eq!(self.mesh_vertex.len(), self.positions.len());
         assert_eq!(self.triangles.len(), self.triangle_face.len());
+        assert_eq!(self.shown.len(), self.shown_face.len());
         for t in &self.triangles {
             assert!(t.iter().all(|&v| v < n), "triangle vertex out of range");
             assert!(t[0] != t[1] && t[1] != t[2] && t[0] != t[2], "degenerate triangle {t:?}");
@@ -436,6 +439,7 @@ fn make_chart(
     let mut quads = Vec::new();
     let mut polygons = Vec::new();
     let mut shown: Vec<[u32; 3]> = Vec::new();
+    let mut shown_face: Vec<u32> = Vec::new();
     // Boundary half-edges (chart vertex a → b): polygon edges not joined to another face.
     let mut boundary_edges: Vec<(u32, u32)> = Vec::new();
     // First pass: chart vertices of every corner, and the chart's polygon edges.
@@ -509,6 +513,7 @@ fn make_chart(
             });
             if taken && m >= 5 {
                 shown.extend(tris.iter().map(|t| [local[t[0]], local[t[1]], local[t[2]]]));
+                shown_face.extend(std::iter::repeat_n(f, tris.len()));
             }
             (!taken).then_some(tris)
         });
@@ -620,6 +625,7 @@ fn make_chart(
         triangle_face,
         quads,
         shown,
+        shown_face,
         polygons,
         boundary_loops,
         genus,

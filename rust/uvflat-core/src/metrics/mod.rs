@@ -80,6 +80,10 @@ pub struct MeshMetrics {
     /// area-normalised. NaN for faces not measured (unselected) or without 3D area, ∞ where a
     /// triangle's UV has zero area.
     pub per_face: Vec<[f64; 2]>,
+    /// Flipped or zero-area UV triangles of every input face ([`measure`] only; empty from
+    /// [`aggregate`]), counted by [`face_flips`]: `flips` is their sum. 0 for faces not
+    /// measured.
+    pub face_flips: Vec<u32>,
 }
 
 /// Singular values (σ1 ≥ σ2 ≥ 0) and sign of the determinant of a 2×2 matrix [[a, b], [c, d]].
@@ -247,23 +251,51 @@ pub fn quad_folds(q: &Quad, uv: &[[f64; 2]], orientation: f64) -> usize {
     (f(0) + f(1)).max(f(2) + f(3))
 }
 
-/// Flipped or zero-area triangles among `shown` ([`is_flipped`]), oriented like the majority
-/// of `triangles` (the chart's own): the render triangles a chart measures beside its own
+/// Which of `shown` are flipped or zero-area ([`is_flipped`]), oriented like the majority of
+/// `triangles` (the chart's own): the render triangles a chart measures beside its own
 /// ([`crate::charts::Chart::shown`]).
-pub fn count_shown_flips(triangles: &[[u32; 3]], shown: &[[u32; 3]], uv: &[[f64; 2]]) -> usize {
+pub fn shown_flips(triangles: &[[u32; 3]], shown: &[[u32; 3]], uv: &[[f64; 2]]) -> Vec<bool> {
     if shown.is_empty() {
-        return 0;
+        return Vec::new();
     }
     let get = |t: &[u32; 3]| [uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]];
     let total: f64 = triangles.iter().map(|t| signed_area_2d(get(t))).sum();
     let orientation = if total < 0.0 { -1.0 } else { 1.0 };
     shown
         .iter()
-        .filter(|t| {
+        .map(|t| {
             let (a, l) = area_and_scale(get(t));
             is_flipped(orientation * a, l)
         })
-        .count()
+        .collect()
+}
+
+/// Flipped or zero-area UV triangles of every face of `chart` (aligned with `chart.faces`),
+/// exactly as a chart's report and [`measure`] count them: the flips [`flip_charges`] puts on
+/// the face's own triangles (a quad: the flips of its worse diagonal split) plus its flipped
+/// render triangles among [`crate::charts::Chart::shown`] ([`shown_flips`]). The chart's flip
+/// count is their sum.
+pub fn face_flips(chart: &crate::charts::Chart, uv: &[[f64; 2]]) -> Vec<u32> {
+    face_flips_with(chart, uv, false)
+}
+
+/// [`face_flips`]; with `every_own`, every own triangle counts as flipped (a chart without 3D
+/// area, see [`chart_metrics`]).
+fn face_flips_with(chart: &crate::charts::Chart, uv: &[[f64; 2]], every_own: bool) -> Vec<u32> {
+    let mut out = vec![0u32; chart.faces.len()];
+    let slot = |f: u32| chart.faces.binary_search(&f).expect("a chart triangle's face is a face of the chart");
+    let charges = if every_own { vec![1u8; chart.triangles.len()] } else { flip_charges(&chart.triangles, &chart.quads, uv) };
+    for (&f, &c) in chart.triangle_face.iter().zip(&charges) {
+        if c > 0 {
+            out[slot(f)] += c as u32;
+        }
+    }
+    for (&f, bad) in chart.shown_face.iter().zip(shown_flips(&chart.triangles, &chart.shown, uv)) {
+        if bad {
+            out[slot(f)] += 1;
+        }
+    }
+    out
 }
 
 /// Measure one chart given per-vertex positions and UVs over its triangles (no quads: every
@@ -344,10 +376,22 @@ fn uv_zero_area(q: [[f64; 2]; 3]) -> bool {
 
 /// Flipped triangles of a chart by the one definition ([`flipped_triangles`]) over its
 /// triangles that are not in a quad and both diagonal splits of every quad, a quad counting
-/// the flips of its worse split: 0 means every quad is strictly convex in UV.
+/// the flips of its worse split: 0 means every quad is strictly convex in UV. The sum of
+/// [`flip_charges`].
 pub fn count_flips_with_quads(triangles: &[[u32; 3]], quads: &[Quad], uv: &[[f64; 2]]) -> usize {
     if quads.is_empty() {
         return count_flips(triangles, uv);
+    }
+    flip_charges(triangles, quads, uv).iter().map(|&c| c as usize).sum()
+}
+
+/// The flips [`count_flips_with_quads`] counts, charged to the triangles of `triangles`: 1 for
+/// a flipped triangle outside the quads ([`flipped_triangles`] over those triangles and both
+/// splits of every quad), and a quad's count (the flips of its worse split, 0 to 2) on its
+/// first own triangle, 0 on its second.
+pub fn flip_charges(triangles: &[[u32; 3]], quads: &[Quad], uv: &[[f64; 2]]) -> Vec<u8> {
+    if quads.is_empty() {
+        return flipped_triangles(triangles, uv).into_iter().map(u8::from).collect();
     }
     let mut in_quad = vec![false; triangles.len()];
     for q in quads {
@@ -355,18 +399,21 @@ pub fn count_flips_with_quads(triangles: &[[u32; 3]], quads: &[Quad], uv: &[[f64
             in_quad[t as usize] = true;
         }
     }
-    let mut all: Vec<[u32; 3]> = triangles.iter().zip(&in_quad).filter(|(_, &q)| !q).map(|(t, _)| *t).collect();
-    let singles = all.len();
+    let single: Vec<usize> = (0..triangles.len()).filter(|&t| !in_quad[t]).collect();
+    let mut all: Vec<[u32; 3]> = single.iter().map(|&t| triangles[t]).collect();
     for q in quads {
         all.extend(q.all_splits());
     }
     let flipped = flipped_triangles(&all, uv);
-    let mut flips = flipped[..singles].iter().filter(|&&f| f).count();
-    for k in 0..quads.len() {
-        let f = &flipped[singles + 4 * k..singles + 4 * k + 4];
-        flips += (f[0] as usize + f[1] as usize).max(f[2] as usize + f[3] as usize);
+    let mut charges = vec![0u8; triangles.len()];
+    for (k, &t) in single.iter().enumerate() {
+        charges[t] = flipped[k] as u8;
     }
-    flips
+    for (k, q) in quads.iter().enumerate() {
+        let f = &flipped[single.len() + 4 * k..single.len() + 4 * k + 4];
+        charges[q.triangles[0] as usize] = (f[0] as u8 + f[1] as u8).max(f[2] as u8 + f[3] as u8);
+    }
+    charges
 }
 
 /// [`chart_metrics`] with the chart's quad faces (whose own two triangles are among
@@ -717,7 +764,7 @@ pub fn measure_with_triangles(
         i = j;
     }
     let charts = build_charts_with(&mesh, &seams, selected, render.as_ref());
-    type Measured = (ChartMetrics, Vec<(u32, [f64; 2])>, Vec<(f64, f64)>);
+    type Measured = (ChartMetrics, Vec<(u32, [f64; 2])>, Vec<(f64, f64)>, Vec<(u32, u32)>);
     let measured: Vec<Measured> = {
         use rayon::prelude::*;
         charts
@@ -729,23 +776,32 @@ pub fn measure_with_triangles(
                 }
                 let mut m = chart_metrics_with_quads(&ch.positions, &ch.triangles, &ch.quads, &vuv, &ch.boundary_loops);
                 m.faces = ch.faces.len();
-                m.flips += count_shown_flips(&ch.triangles, &ch.shown, &vuv);
-                (m, face_distortion(ch, &vuv), density::density_ratios(&ch.positions, &ch.triangles, &vuv))
+                // Per face, as a report counts them (a chart without 3D area: every own
+                // triangle, as `chart_metrics`); the chart's count is their sum.
+                let flips = face_flips_with(ch, &vuv, !(m.area_3d > 0.0));
+                m.flips = flips.iter().map(|&n| n as usize).sum();
+                let flips: Vec<(u32, u32)> = ch.faces.iter().copied().zip(flips).collect();
+                (m, face_distortion(ch, &vuv), density::density_ratios(&ch.positions, &ch.triangles, &vuv), flips)
             })
             .collect()
     };
     let mut per_face = vec![[f64::NAN; 2]; mesh.n_faces()];
+    let mut face_flips = vec![0u32; mesh.n_faces()];
     let mut per_chart = Vec::with_capacity(measured.len());
     let mut samples = Vec::new();
-    for (m, faces, ratios) in measured {
+    for (m, faces, ratios, flips) in measured {
         for (f, d) in faces {
             per_face[f as usize] = d;
+        }
+        for (f, n) in flips {
+            face_flips[f as usize] = n;
         }
         per_chart.push(m);
         samples.extend(ratios);
     }
     let mut out = aggregate(per_chart);
     out.per_face = per_face;
+    out.face_flips = face_flips;
     out.density = density::spread_of(samples, DEFAULT_DENSITY_BOUND);
     Ok(out)
 }
@@ -812,6 +868,7 @@ pub fn aggregate(per_chart: Vec<ChartMetrics>) -> MeshMetrics {
         distortion: Distortion { conformal: d[0], area: d[1], symmetric_dirichlet: d[2] },
         per_chart,
         per_face: Vec::new(),
+        face_flips: Vec::new(),
     }
 }
 

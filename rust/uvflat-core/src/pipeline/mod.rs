@@ -66,6 +66,9 @@ pub struct Piece {
     pub report: ChartReport,
     /// UV per chart vertex (`None` when the chart failed).
     pub uv: Option<Vec<[f64; 2]>>,
+    /// Flipped triangles of every face of the piece (aligned with its chart's `faces`; empty
+    /// without UVs): the report's `flips` is their sum.
+    pub face_flips: Vec<u32>,
     /// Seams added for this piece (mesh vertex pairs).
     pub seams: Vec<[u32; 2]>,
     /// 3D area of the piece.
@@ -74,9 +77,15 @@ pub struct Piece {
 
 impl Piece {
     /// A piece of `chart` (its 3D area measured here).
-    pub fn new(chart: Option<Chart>, report: ChartReport, uv: Option<Vec<[f64; 2]>>, seams: Vec<[u32; 2]>) -> Piece {
+    pub fn new(
+        chart: Option<Chart>,
+        report: ChartReport,
+        uv: Option<Vec<[f64; 2]>>,
+        face_flips: Vec<u32>,
+        seams: Vec<[u32; 2]>,
+    ) -> Piece {
         let area = chart.as_ref().map_or(0.0, chart_area);
-        Piece { chart, report, uv, seams, area }
+        Piece { chart, report, uv, face_flips, seams, area }
     }
 }
 
@@ -116,10 +125,10 @@ fn road(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], depth: us
         return repair::repair(ctx, chart, base_seams, depth, None);
     }
     let t = std::time::Instant::now();
-    let (report, uv) = solve::solve_chart(chart, ctx.pins, ctx.options, &ctx.rule);
+    let (report, uv, face_flips) = solve::solve_chart(chart, ctx.pins, ctx.options, &ctx.rule);
     ctx.clock.add(|p| p.solve += t.elapsed().as_secs_f64());
     let broken = !report.status.mapped() || ctx.rule.broken(&report).is_some();
-    let first = Piece { chart: None, report, uv, seams: Vec::new(), area: chart_area(chart) };
+    let first = Piece { chart: None, report, uv, face_flips, seams: Vec::new(), area: chart_area(chart) };
     if road == Triage::SolveThenRepair && broken {
         repair::repair(ctx, chart, base_seams, depth, Some(first))
     } else {

@@ -62,7 +62,7 @@ pub fn repair(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], dep
         for (k, c) in sub.into_iter().enumerate() {
             // A piece the cut did not open (it should not happen) breaks the rule and is
             // repaired or split like any other.
-            let (mut report, uv) = solve_chart(&c, ctx.pins, ctx.options, &ctx.rule);
+            let (mut report, uv, face_flips) = solve_chart(&c, ctx.pins, ctx.options, &ctx.rule);
             let seams = if k == 0 {
                 report.cones = cut.cones.len();
                 report.cut_length = cut.length;
@@ -70,7 +70,7 @@ pub fn repair(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], dep
             } else {
                 Vec::new()
             };
-            pieces.push(Piece::new(Some(c), report, uv, seams));
+            pieces.push(Piece::new(Some(c), report, uv, face_flips, seams));
         }
         ctx.clock.add(|p| {
             p.repair_solve += t.elapsed().as_secs_f64();

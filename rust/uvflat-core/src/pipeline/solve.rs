@@ -14,12 +14,16 @@ use crate::unwrap::{Fit, UnwrapOptions};
 /// distortion, density spread against `rule.max_stretch`) and set its status and problem.
 ///
 /// Never fails: a chart the method cannot map comes back [`ChartStatus::Failed`] with no UVs.
+///
+/// Returns the report, the UVs (per chart vertex) and the flipped triangles of every face of
+/// the chart (aligned with `chart.faces`; empty without UVs), whose sum is the report's
+/// `flips`.
 pub fn solve_chart(
     chart: &Chart,
     pin_of_corner: &HashMap<u32, [f64; 2]>,
     options: &UnwrapOptions,
     rule: &AtlasRule,
-) -> (ChartReport, Option<Vec<[f64; 2]>>) {
+) -> (ChartReport, Option<Vec<[f64; 2]>>, Vec<u32>) {
     let start = std::time::Instant::now();
     let mut report = ChartReport::new(chart, options.method.name());
     // Pins per chart vertex (average when corners of one vertex disagree).
@@ -38,7 +42,7 @@ pub fn solve_chart(
             });
             report.reason = Some(reason);
             report.seconds = start.elapsed().as_secs_f64();
-            return (report, None);
+            return (report, None, Vec::new());
         }
     };
     if let Some(fallback) = solution.fallback.take() {
@@ -57,7 +61,8 @@ pub fn solve_chart(
             append(&mut report.reason, note);
         }
     }
-    let m = metrics::chart_metrics_with_quads(&chart.positions, &chart.triangles, &chart.quads, &solution.uv, &chart.boundary_loops);
+    // Flips are counted below, per face (quads on both splits); the rest measured here.
+    let m = metrics::chart_metrics(&chart.positions, &chart.triangles, &solution.uv, &chart.boundary_loops);
     if !(m.area_3d > 0.0) {
         // Every face is degenerate (collinear or coincident corners): no UV map can match a
         // surface without area, so the chart keeps its UVs and says why.
@@ -66,16 +71,18 @@ pub fn solve_chart(
         report.method = options.method.name();
         report.reason = Some("the chart has no 3D area (every face is degenerate): its UVs are left as they were".into());
         report.seconds = start.elapsed().as_secs_f64();
-        return (report, None);
+        return (report, None, Vec::new());
     }
-    // Flips on the render triangles of n-gons that kept the core's split count too.
-    report.flips = m.flips + metrics::count_shown_flips(&chart.triangles, &chart.shown, &solution.uv);
+    // Per face (the render triangles of n-gons that kept the core's split count too); the
+    // report's count is their sum.
+    let face_flips = metrics::face_flips(chart, &solution.uv);
+    report.flips = face_flips.iter().map(|&n| n as usize).sum();
     report.overlap = m.overlap;
     report.distortion = m.distortion;
     report.density = metrics::density_spread(&chart.positions, &chart.triangles, &solution.uv, rule.max_stretch);
     hold_to(rule, &mut report);
     report.seconds = start.elapsed().as_secs_f64();
-    (report, Some(solution.uv))
+    (report, Some(solution.uv), face_flips)
 }
 
 /// Mark a mapped report [`ChartStatus::Invalid`] when it breaks `rule`, saying how.

@@ -225,3 +225,100 @@ pub fn cpu_seconds() -> f64 {
     }
     ns as f64 * 1e-9
 }
+
+/// Small deterministic generator (xorshift), uniform in [0, 1).
+pub struct QuadRng(pub u64);
+impl QuadRng {
+    pub fn next(&mut self) -> f64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// A noisy, curved quad grid (a saddle with bumps and some dart-shaped quads), `n × n` quads, and random seams
+/// that cut it into charts (random walks along grid edges from the border).
+pub fn curved_quad_grid(n: usize, seed: u64) -> (Soup, Vec<[u32; 2]>) {
+    let mut rng = QuadRng(seed);
+    let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
+    let mut positions = Vec::new();
+    for j in 0..=n {
+        for i in 0..=n {
+            let (x, y) = (i as f64 / n as f64 * 2.0 - 1.0, j as f64 / n as f64 * 2.0 - 1.0);
+            let h = 2.0 / n as f64;
+            let (mut jx, mut jy) = (0.3 * h * (rng.next() - 0.5), 0.3 * h * (rng.next() - 0.5));
+            // Every few interior vertices move 0.6 of the way along their quad's diagonal:
+            // that quad becomes a dart (concave in 3D, convex only by moving it in UV), so
+            // a faithful map folds it on one diagonal.
+            if i > 0 && j > 0 && i < n - 1 && j < n - 1 && (7 * i + 3 * j) % 11 == 0 {
+                jx = 0.6 * h;
+                jy = 0.6 * h;
+            }
+            let z = 0.6 * (x * x - y * y) + 0.2 * (3.0 * x).sin() * (2.0 * y).cos();
+            positions.push([x + jx, y + jy, z]);
+        }
+    }
+    let mut corner_verts = Vec::new();
+    let mut face_sizes = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            corner_verts.extend([id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)]);
+            face_sizes.push(4);
+        }
+    }
+    let mut seams = Vec::new();
+    for w in 0..4 {
+        let (mut i, mut j) = if w % 2 == 0 { (0, (rng.next() * n as f64) as usize) } else { ((rng.next() * n as f64) as usize, 0) };
+        for _ in 0..n {
+            let (ni, nj) = if rng.next() < 0.5 { ((i + 1).min(n), j) } else { (i, (j + 1).min(n)) };
+            if (ni, nj) == (i, j) {
+                break;
+            }
+            seams.push([id(i, j), id(ni, nj)]);
+            (i, j) = (ni, nj);
+        }
+    }
+    (Soup { positions, corner_verts, face_sizes }, seams)
+}
+
+/// A brick wall of hexagons (pairs of grid quads merged, rows offset), noisy and curved, with
+/// some middle vertices pushed across their hexagon: concave n-gons in 3D.
+pub fn brick_hexagons(n: usize, seed: u64) -> Soup {
+    let mut rng = QuadRng(seed);
+    let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
+    let h = 2.0 / n as f64;
+    let mut positions = Vec::new();
+    for j in 0..=n {
+        for i in 0..=n {
+            let (mut x, mut y) = (i as f64 * h - 1.0, j as f64 * h - 1.0);
+            x += 0.3 * h * (rng.next() - 0.5);
+            y += 0.3 * h * (rng.next() - 0.5);
+            if i > 0 && j > 0 && i < n && j < n && (5 * i + 3 * j) % 7 == 0 {
+                y += 0.7 * h;
+            }
+            positions.push([x, y, 0.5 * (x * x - y * y) + 0.2 * (3.0 * x).sin()]);
+        }
+    }
+    let (mut corner_verts, mut face_sizes) = (Vec::new(), Vec::new());
+    for j in 0..n {
+        let mut i = 0;
+        if j % 2 == 1 {
+            corner_verts.extend([id(0, j), id(1, j), id(1, j + 1), id(0, j + 1)]);
+            face_sizes.push(4);
+            i = 1;
+        }
+        while i < n {
+            if i + 2 <= n {
+                corner_verts.extend([id(i, j), id(i + 1, j), id(i + 2, j), id(i + 2, j + 1), id(i + 1, j + 1), id(i, j + 1)]);
+                face_sizes.push(6);
+                i += 2;
+            } else {
+                corner_verts.extend([id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)]);
+                face_sizes.push(4);
+                i += 1;
+            }
+        }
+    }
+    Soup { positions, corner_verts, face_sizes }
+}

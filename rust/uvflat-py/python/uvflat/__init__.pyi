@@ -197,6 +197,12 @@ class UnwrapResult:
     def face_area(self) -> npt.NDArray[np.float64]:
         """Area distortion of every face that received UVs, shape (F,), NaN elsewhere."""
     @property
+    def face_flips(self) -> npt.NDArray[np.uint32]:
+        """Flipped or zero-area UV triangles of every face, shape (F,), exactly as the chart
+        reports count them (the render ``triangles`` when given; a quad counts the flips of
+        its worse diagonal split): each report's ``flips`` is the sum over its faces, and
+        ``face_flips > 0`` marks the flipped faces. 0 for faces without UVs."""
+    @property
     def phases(self) -> dict[str, float | int]:
         """Where the time went: ``build_charts``, ``plan_cuts``, ``solve``, ``repair_solve``,
         ``measure`` (seconds; per-chart steps summed over threads) and the counts
@@ -263,6 +269,11 @@ class Metrics:
     @property
     def face_area(self) -> npt.NDArray[np.float64]:
         """Area distortion of every face, shape (F,), as ``face_conformal``."""
+    @property
+    def face_flips(self) -> npt.NDArray[np.uint32]:
+        """Flipped or zero-area UV triangles of every face, shape (F,), counted as ``flips``
+        counts them (``flips`` is their sum); 0 for faces not measured. ``face_flips > 0``
+        marks the flipped faces (what the add-on's *Select Flipped Faces* selects)."""
     def as_dict(self) -> dict[str, Any]:
         """All fields as a plain dict."""
 
