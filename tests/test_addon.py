@@ -1099,6 +1099,7 @@ def test_modal_unwrap_matches_the_direct_one(ext, scene, monkeypatch):
     obj = suzanne()
     io = ext.mesh_io
     before = read(ext, obj)
+    seams_before = io.read_edges(obj.data)[1].copy()
     common.edit_mode([obj])
     ctx = _ContextStandIn()
     op = _operator_stand_in(ext, method="lscm", pack="OFF")
@@ -1116,8 +1117,10 @@ def test_modal_unwrap_matches_the_direct_one(ext, scene, monkeypatch):
     assert ctx.window_manager.progress[0][0] == "begin" and ctx.window_manager.progress[-1] == ("end",)
     assert ctx.status and "Esc" in ctx.status[0] and ctx.status[-1] is None
     assert op.reports and "lscm" in op.reports[-1][1]
-    # the same unwrap in one go gives the same UVs
+    # the same unwrap in one go gives the same UVs (from the same UVs and seams: automatic
+    # seams marked the seams they cut)
     io.write_uv(obj.data, io.active_uv_name(obj.data), before.uv)
+    io.write_seams(obj.data, seams_before)
     result, _ = unwrap(ext, [obj], method="lscm", pack="OFF")
     assert result == {"FINISHED"}
     np.testing.assert_array_equal(read(ext, obj).uv, modal_uv)
@@ -1478,11 +1481,13 @@ def test_correct_aspect_halves_u_for_a_wide_texture(ext, scene):
     obj = suzanne()
     io = ext.mesh_io
     before = read(ext, obj)
+    seams_before = io.read_edges(obj.data)[1].copy()
     result, summary = unwrap(ext, [obj], method="lscm", pack="OFF", correct_aspect=False)
     assert result == {"FINISHED"}
     plain = read(ext, obj).uv
     _material_with_image(obj, 256, 128)
     io.write_uv(obj.data, io.active_uv_name(obj.data), before.uv)
+    io.write_seams(obj.data, seams_before)  # the seams the first run marked are undone
     result, summary = unwrap(ext, [obj], method="lscm", pack="OFF", correct_aspect=True)
     assert result == {"FINISHED"}
     wide = read(ext, obj).uv

@@ -118,6 +118,12 @@ impl Drop for ProgressGuard {
     }
 }
 
+/// The progress [`Progress::enter`]ed on this thread, if any: work the unwrap hands to other
+/// threads (a split chart's halves) enters it there, so its methods see a cancel too.
+pub fn current() -> Option<Progress> {
+    CURRENT.with(|c| c.borrow().clone())
+}
+
 /// Whether the unwrap running on this thread was cancelled (false outside any unwrap); also
 /// gives its callback a chance to cancel. Polled by the iterative methods once per iteration.
 pub fn cancelled() -> bool {

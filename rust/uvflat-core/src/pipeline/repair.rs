@@ -47,6 +47,10 @@ pub fn repair(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], dep
     let mut best_next: Vec<u32> = seed.clone();
     let mut single = false;
     for round in 0..=cuts::REPAIR_ROUNDS {
+        if crate::progress::cancelled() {
+            // The unwrap is discarded: no more solves.
+            return best;
+        }
         let t = std::time::Instant::now();
         let cut = cutter.cut(&seed, round);
         if cut.seams.is_empty() && !best.is_empty() {
@@ -124,9 +128,17 @@ pub fn repair(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], dep
             let halves = build_charts_with(ctx.mesh, &all, Some(&mask), ctx.render);
             // Each half takes the pipeline's road again (cut, or solve then repair), the halves
             // in parallel; results in half order, so the outcome does not depend on threads.
+            // The unwrap's progress goes with them, so a cancel reaches their solves.
+            let progress = crate::progress::current();
             let lists: Vec<Vec<Piece>> = {
                 use rayon::prelude::*;
-                halves.into_par_iter().map(|h| super::run(ctx, h, &all, depth + 1)).collect()
+                halves
+                    .into_par_iter()
+                    .map(|h| {
+                        let _guard = progress.as_ref().map(|p| p.enter());
+                        super::run(ctx, h, &all, depth + 1)
+                    })
+                    .collect()
             };
             let mut out = Vec::new();
             for (k, mut list) in lists.into_iter().enumerate() {
