@@ -21,6 +21,8 @@ from typing import Any, Callable
 
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, StringProperty
 
+from . import engine
+
 
 @dataclass(frozen=True)
 class MethodInfo:
@@ -302,18 +304,17 @@ def common_properties() -> dict[str, Any]:
     return props
 
 
-def _import_core():
-    try:
-        import uvflat
-    except ImportError as ex:  # pragma: no cover - depends on the installation
-        raise ImportError(f"uvflat: the uvflat module could not be imported ({ex}); reinstall "
-                          "the extension for this platform") from ex
-    return uvflat
-
-
 # The core's declared automatic-seams options (uvflat.AUTO_SEAM_OPTIONS) by name: the
 # properties below take their defaults, bounds and choices from it.
-AUTO_SEAM_SPECS: dict[str, dict[str, Any]] = {s["name"]: s for s in _import_core().AUTO_SEAM_OPTIONS}
+def _core():
+    """The uvflat module; an ImportError (the add-on cannot load) when it is missing."""
+    try:
+        return engine.import_core()
+    except engine.UnwrapError as ex:  # pragma: no cover - depends on the installation
+        raise ImportError(f"uvflat: {ex}") from ex
+
+
+AUTO_SEAM_SPECS: dict[str, dict[str, Any]] = {s["name"]: s for s in _core().AUTO_SEAM_OPTIONS}
 
 # Options set on the Blender side: avoid_vertices comes from the vertex group named by
 # avoid_group (engine.py), sharp_angle is on only with prefer_sharp.

@@ -166,40 +166,31 @@ pub fn all_valid(ctx: &Context<'_, '_>, pieces: &[Piece]) -> bool {
     pieces.iter().all(|p| p.report.status.mapped() && ctx.rule.broken(&p.report).is_none())
 }
 
+/// Summed [`super::rule::AtlasRule::badness`] of a set of pieces.
+fn badness(ctx: &Context<'_, '_>, pieces: &[Piece]) -> ((usize, usize, usize, usize), f64) {
+    let mut t = ((0usize, 0usize, 0usize, 0usize), 0.0f64);
+    for p in pieces {
+        let x = ctx.rule.badness(&p.report, p.area);
+        t = ((t.0 .0 + x.0, t.0 .1 + x.1, t.0 .2 + x.2, t.0 .3 + x.3), t.1 + x.4);
+    }
+    t
+}
+
 /// `a` is a strictly better set of pieces than `b` (see the module docs).
 fn better(ctx: &Context<'_, '_>, a: &[Piece], b: &[Piece]) -> bool {
-    let total = |ps: &[Piece]| {
-        let mut t = (0usize, 0usize, 0usize, 0usize, 0.0f64);
-        for p in ps {
-            let x = ctx.rule.badness(&p.report, p.area);
-            t = (t.0 + x.0, t.1 + x.1, t.2 + x.2, t.3 + x.3, t.4 + x.4);
-        }
-        t
-    };
-    let (x, y) = (total(a), total(b));
-    (x.0, x.1, x.2, x.3)
-        .cmp(&(y.0, y.1, y.2, y.3))
-        .then(x.4.total_cmp(&y.4))
-        .then(a.len().cmp(&b.len()))
-        == std::cmp::Ordering::Less
+    let (x, y) = (badness(ctx, a), badness(ctx, b));
+    x.0.cmp(&y.0).then(x.1.total_cmp(&y.1)).then(a.len().cmp(&b.len())) == std::cmp::Ordering::Less
 }
 
 /// `a` is better than `b` by more than noise: fewer failures, flips, overlaps or non-disks, or
 /// (with those equal) at most [`PROGRESS`] of `b`'s area beyond the density bound.
 fn clearly_better(ctx: &Context<'_, '_>, a: &[Piece], b: &[Piece]) -> bool {
-    let total = |ps: &[Piece]| {
-        let mut t = (0usize, 0usize, 0usize, 0usize, 0.0f64);
-        for p in ps {
-            let x = ctx.rule.badness(&p.report, p.area);
-            t = (t.0 + x.0, t.1 + x.1, t.2 + x.2, t.3 + x.3, t.4 + x.4);
-        }
-        t
-    };
-    let (x, y) = (total(a), total(b));
-    match (x.0, x.1, x.2, x.3).cmp(&(y.0, y.1, y.2, y.3)) {
+    let (x, y) = (badness(ctx, a), badness(ctx, b));
+    match x.0.cmp(&y.0) {
         std::cmp::Ordering::Less => true,
         std::cmp::Ordering::Greater => false,
-        std::cmp::Ordering::Equal => x.4 <= PROGRESS * y.4,
+        // Nothing beyond the bound in `b` (it breaks the rule otherwise): no progress to make.
+        std::cmp::Ordering::Equal => y.1 > 0.0 && x.1 <= PROGRESS * y.1,
     }
 }
 
