@@ -113,32 +113,32 @@ def island_bounds(uv, face_sizes, island, n_islands):
 def scale_islands(uv, face_sizes, island, factors):
     """Scale every island's UVs by ``factors[island]`` about the centre of its bounding box,
     in place (``uv``: (C,2) float array; faces of island -1 untouched)."""
-    island = np.asarray(island, dtype=np.int64)
     factors = np.asarray(factors, dtype=np.float64)
-    low, high = island_bounds(uv, face_sizes, island, len(factors))
-    centre = 0.5 * (low + high)
+    corners, ci, centre, d = _about_centres(uv, face_sizes, island, len(factors))
+    uv[corners] = centre + d * factors[ci][:, None]
+    return uv
+
+
+def _about_centres(uv, face_sizes, island, n_islands):
+    """The corners of islands ``>= 0``, their island, their island's bounding-box centre and
+    their offset from it (float64)."""
+    island = np.asarray(island, dtype=np.int64)
+    low, high = island_bounds(uv, face_sizes, island, n_islands)
     corner_island = np.repeat(island, face_sizes)
     corners = np.flatnonzero(corner_island >= 0)
     ci = corner_island[corners]
-    moved = centre[ci] + (uv[corners].astype(np.float64) - centre[ci]) * factors[ci][:, None]
-    uv[corners] = moved
-    return uv
+    centre = 0.5 * (low + high)[ci]
+    return corners, ci, centre, uv[corners].astype(np.float64) - centre
 
 
 def rotate_islands(uv, face_sizes, island, angles):
     """Rotate every island's UVs by ``angles[island]`` (radians, counter-clockwise) about the
     centre of its bounding box, in place."""
-    island = np.asarray(island, dtype=np.int64)
     angles = np.asarray(angles, dtype=np.float64)
-    low, high = island_bounds(uv, face_sizes, island, len(angles))
-    centre = 0.5 * (low + high)
-    corner_island = np.repeat(island, face_sizes)
-    corners = np.flatnonzero(corner_island >= 0)
-    ci = corner_island[corners]
-    d = uv[corners].astype(np.float64) - centre[ci]
+    corners, ci, centre, d = _about_centres(uv, face_sizes, island, len(angles))
     c, s = np.cos(angles[ci]), np.sin(angles[ci])
-    uv[corners, 0] = centre[ci, 0] + c * d[:, 0] - s * d[:, 1]
-    uv[corners, 1] = centre[ci, 1] + s * d[:, 0] + c * d[:, 1]
+    uv[corners, 0] = centre[:, 0] + c * d[:, 0] - s * d[:, 1]
+    uv[corners, 1] = centre[:, 1] + s * d[:, 0] + c * d[:, 1]
     return uv
 
 

@@ -6,57 +6,18 @@ use std::collections::BTreeSet;
 use uvflat_core::charts::build_charts;
 use uvflat_core::cuts::{self, symmetry, AutoSeamOptions, ChartGraph, Symmetry};
 use uvflat_core::mesh::PolyMesh;
-use uvflat_core::{unwrap, ChartKind, ChartStatus, MeshInput, UnwrapOptions};
+use uvflat_core::{unwrap, ChartKind, ChartStatus, UnwrapOptions};
 
-struct Mesh {
-    positions: Vec<[f64; 3]>,
-    corner_verts: Vec<u32>,
-    face_sizes: Vec<u32>,
-}
+mod common;
 
-impl Mesh {
-    fn input(&self) -> MeshInput<'_> {
-        MeshInput { positions: &self.positions, corner_verts: &self.corner_verts, face_sizes: &self.face_sizes, ..Default::default() }
-    }
-}
+use common::{cube_sphere, Soup as Mesh};
 
 /// A closed blob mirror-symmetric in the plane x = 0 only: a subdivided cube projected on the
 /// sphere (n × n quads a side, n a power of two so the grid is exactly symmetric), bent by a
 /// map that is odd in x for x and even in x for y and z, with two "ears" at (±0.6, 0.8, 0) and
 /// one snout at (0, 0.2, 1) on the plane. `ears` = (left, right) heights.
 fn blob(n: usize, ears: (f64, f64)) -> Mesh {
-    let mut positions: Vec<[f64; 3]> = Vec::new();
-    let mut index = std::collections::HashMap::new();
-    let mut cv = Vec::new();
-    let ni = n as i64;
-    for axis in 0..3 {
-        for side in [0, ni] {
-            for i in 0..ni {
-                for j in 0..ni {
-                    let mk = |a: i64, b: i64| {
-                        let mut p = [0i64; 3];
-                        p[axis] = side;
-                        p[(axis + 1) % 3] = a;
-                        p[(axis + 2) % 3] = b;
-                        p
-                    };
-                    let mut q = [mk(i, j), mk(i + 1, j), mk(i + 1, j + 1), mk(i, j + 1)];
-                    if side == 0 {
-                        q.reverse();
-                    }
-                    for p in q {
-                        let v = *index.entry(p).or_insert_with(|| {
-                            let x = [p[0] as f64 / ni as f64 * 2.0 - 1.0, p[1] as f64 / ni as f64 * 2.0 - 1.0, p[2] as f64 / ni as f64 * 2.0 - 1.0];
-                            let l = (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).sqrt();
-                            positions.push([x[0] / l, x[1] / l, x[2] / l]);
-                            (positions.len() - 1) as u32
-                        });
-                        cv.push(v);
-                    }
-                }
-            }
-        }
-    }
+    let Mesh { mut positions, corner_verts, face_sizes } = cube_sphere(n);
     for p in &mut positions {
         let [x, y, z] = *p;
         let bump = |d: [f64; 3]| (-((x - d[0]).powi(2) + (y - d[1]).powi(2) + (z - d[2]).powi(2)) / 0.06).exp();
@@ -64,8 +25,7 @@ fn blob(n: usize, ears: (f64, f64)) -> Mesh {
         let (x, y, z) = (x * out, y * out, z * out);
         *p = [x * (1.0 + 0.2 * y), 1.4 * y + 0.3 * x * x - 0.2 * z * z, 0.8 * z + 0.25 * y * y + 0.15 * x * x];
     }
-    let face_sizes = vec![4; cv.len() / 4];
-    Mesh { positions, corner_verts: cv, face_sizes }
+    Mesh { positions, corner_verts, face_sizes }
 }
 
 /// Rotate and move every position (a generic rigid motion).

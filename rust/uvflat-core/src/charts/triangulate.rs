@@ -47,13 +47,7 @@ pub fn triangulate_polygon_with(
         return vec![[0, 1, 2]];
     }
     // Newell normal and a 2D basis of its plane.
-    let mut nrm = [0.0f64; 3];
-    for i in 0..n {
-        let (a, b) = (pts[i], pts[(i + 1) % n]);
-        nrm[0] += (a[1] - b[1]) * (a[2] + b[2]);
-        nrm[1] += (a[2] - b[2]) * (a[0] + b[0]);
-        nrm[2] += (a[0] - b[0]) * (a[1] + b[1]);
-    }
+    let nrm = crate::geometry::newell_normal(n, |i| pts[i]);
     let ln = norm(nrm);
     let p2: Vec<[f64; 2]> = if ln > 0.0 {
         let z = [nrm[0] / ln, nrm[1] / ln, nrm[2] / ln];

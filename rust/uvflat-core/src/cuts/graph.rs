@@ -48,14 +48,7 @@ impl ChartGraph {
             .iter()
             .map(|poly| {
                 // Newell's normal: robust for non-planar polygons.
-                let mut n = [0.0; 3];
-                for i in 0..poly.len() {
-                    let a = chart.positions[poly[i] as usize];
-                    let b = chart.positions[poly[(i + 1) % poly.len()] as usize];
-                    n[0] += (a[1] - b[1]) * (a[2] + b[2]);
-                    n[1] += (a[2] - b[2]) * (a[0] + b[0]);
-                    n[2] += (a[0] - b[0]) * (a[1] + b[1]);
-                }
+                let n = crate::geometry::newell_normal(poly.len(), |i| chart.positions[poly[i] as usize]);
                 let l = norm(n);
                 if l > 0.0 {
                     [n[0] / l, n[1] / l, n[2] / l]

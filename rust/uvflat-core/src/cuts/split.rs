@@ -210,15 +210,7 @@ fn cut_at_level(
 
 /// 3D area of a polygon (half the length of Newell's normal).
 fn polygon_area(chart: &Chart, poly: &[u32]) -> f64 {
-    let mut n = [0.0; 3];
-    for i in 0..poly.len() {
-        let a = chart.positions[poly[i] as usize];
-        let b = chart.positions[poly[(i + 1) % poly.len()] as usize];
-        n[0] += (a[1] - b[1]) * (a[2] + b[2]);
-        n[1] += (a[2] - b[2]) * (a[0] + b[0]);
-        n[2] += (a[0] - b[0]) * (a[1] + b[1]);
-    }
-    0.5 * norm(n)
+    0.5 * norm(crate::geometry::newell_normal(poly.len(), |i| chart.positions[poly[i] as usize]))
 }
 
 /// Polygons sharing an interior edge, per polygon.

@@ -24,6 +24,18 @@ pub fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
 pub fn norm(a: [f64; 3]) -> f64 {
     dot(a, a).sqrt()
 }
+/// Newell's normal of the polygon `point(0), …, point(n − 1)`: twice its vector area, robust
+/// for non-planar polygons (its length is twice the area of a planar one).
+pub fn newell_normal(n: usize, point: impl Fn(usize) -> [f64; 3]) -> [f64; 3] {
+    let mut nrm = [0.0f64; 3];
+    for i in 0..n {
+        let (a, b) = (point(i), point((i + 1) % n));
+        nrm[0] += (a[1] - b[1]) * (a[2] + b[2]);
+        nrm[1] += (a[2] - b[2]) * (a[0] + b[0]);
+        nrm[2] += (a[0] - b[0]) * (a[1] + b[1]);
+    }
+    nrm
+}
 #[inline]
 pub fn cross2(a: [f64; 2], b: [f64; 2]) -> f64 {
     a[0] * b[1] - a[1] * b[0]

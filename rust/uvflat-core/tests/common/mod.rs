@@ -322,3 +322,43 @@ pub fn brick_hexagons(n: usize, seed: u64) -> Soup {
     }
     Soup { positions, corner_verts, face_sizes }
 }
+
+/// Unit sphere from a subdivided cube: `n × n` quads a side projected on the sphere (exactly
+/// mirror-symmetric in the three coordinate planes when `n` is even).
+pub fn cube_sphere(n: usize) -> Soup {
+    let mut positions: Vec<[f64; 3]> = Vec::new();
+    let mut index = std::collections::HashMap::new();
+    let mut cv = Vec::new();
+    let mut fs = Vec::new();
+    let ni = n as i64;
+    for axis in 0..3 {
+        for side in [0, ni] {
+            for i in 0..ni {
+                for j in 0..ni {
+                    let mk = |a: i64, b: i64| {
+                        let mut p = [0i64; 3];
+                        p[axis] = side;
+                        p[(axis + 1) % 3] = a;
+                        p[(axis + 2) % 3] = b;
+                        p
+                    };
+                    let mut q = [mk(i, j), mk(i + 1, j), mk(i + 1, j + 1), mk(i, j + 1)];
+                    if side == 0 {
+                        q.reverse();
+                    }
+                    for p in q {
+                        let v = *index.entry(p).or_insert_with(|| {
+                            let x = [p[0] as f64 / ni as f64 * 2.0 - 1.0, p[1] as f64 / ni as f64 * 2.0 - 1.0, p[2] as f64 / ni as f64 * 2.0 - 1.0];
+                            let l = (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).sqrt();
+                            positions.push([x[0] / l, x[1] / l, x[2] / l]);
+                            (positions.len() - 1) as u32
+                        });
+                        cv.push(v);
+                    }
+                    fs.push(4);
+                }
+            }
+        }
+    }
+    Soup { positions, corner_verts: cv, face_sizes: fs }
+}
