@@ -201,7 +201,7 @@ pub fn edge_costs_cached(
     cache: Option<&visibility::VisibilityCache>,
 ) -> Vec<f64> {
     // A mesh wound inwards has its valleys where the winding sees ridges.
-    let inward = visibility::wound_inward(mesh);
+    let inward = cache.map_or_else(|| visibility::wound_inward(mesh), |c| c.inward(mesh));
     let visibility = (options.visibility_weight > 0.0).then(|| match cache {
         Some(c) => c.chart(mesh, chart, inward),
         None => visibility::chart_visibility(mesh, chart, inward),

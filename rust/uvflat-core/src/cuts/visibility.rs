@@ -462,13 +462,21 @@ mod tests {
 /// parallel never write the same entry (the result does not depend on the thread count). A
 /// piece's vertex takes the value of its corners, all cast from the same vertex of the chart
 /// the piece came from.
+///
+/// It also keeps [`wound_inward`] of the mesh, a pass over every face, made once per unwrap
+/// rather than once per chart cut.
 #[derive(Debug)]
-pub struct VisibilityCache(std::sync::Mutex<Vec<f64>>);
+pub struct VisibilityCache(std::sync::Mutex<Vec<f64>>, std::sync::OnceLock<bool>);
 
 impl VisibilityCache {
     /// An empty cache for a mesh of `n_corners` corners.
     pub fn new(n_corners: usize) -> Self {
-        VisibilityCache(std::sync::Mutex::new(vec![f64::NAN; n_corners]))
+        VisibilityCache(std::sync::Mutex::new(vec![f64::NAN; n_corners]), std::sync::OnceLock::new())
+    }
+
+    /// [`wound_inward`] of `mesh` (the mesh this cache was made for), computed once.
+    pub fn inward(&self, mesh: &PolyMesh<'_>) -> bool {
+        *self.1.get_or_init(|| wound_inward(mesh))
     }
 
     /// [`chart_visibility`] of `chart`, from the cache when every corner of the chart is known.
