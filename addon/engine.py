@@ -91,8 +91,13 @@ class Summary:
     texel_density: float = 0.0
     texture_size: int = 1024
     density_overflow: bool = False
-    # object name -> UV units per metre of surface of every chart (NaN where not solved)
+    # object name -> UV units per metre of surface of every chart (NaN where not solved):
+    # sqrt(UV area / world surface area)
     chart_density: dict = field(default_factory=dict)
+    # object name -> the texture aspect (width / height) its new islands were corrected for
+    # (1.0 without Correct Aspect): the texture is then texture_size by texture_size / aspect
+    # pixels (see px_per_metre)
+    chart_aspect: dict = field(default_factory=dict)
     results: dict = field(default_factory=dict)  # object name -> uvflat.UnwrapResult
     # Seconds per phase of the last run (for benchmarks); they add up to ``seconds``:
     # "read", "solve", "quality" (the core's measure of the per-face distortion), "write"
@@ -100,6 +105,18 @@ class Summary:
     # of ``proxy_pack`` everything it does), "mode" (edit/object mode switches and selection
     # changes around them) and "other" (the rest: summaries, bookkeeping).
     phases: dict = field(default_factory=dict)
+
+    def px_per_metre(self, name):
+        """Texel density of every chart of object ``name`` in texture pixels per metre of
+        surface: ``sqrt(pixel area / world area)`` on a texture of ``texture_size`` pixels along
+        U and ``texture_size / aspect`` along V (Correct Aspect's aspect; a square texture
+        without it). An island corrected for that aspect has this density along U and along
+        V. ``None`` when the object's densities were not measured."""
+        per_metre = self.chart_density.get(name)
+        if per_metre is None:
+            return None
+        aspect_ = float(self.chart_aspect.get(name, 1.0))
+        return np.asarray(per_metre, dtype=np.float64) * (self.texture_size / np.sqrt(aspect_))
 
     @property
     def needs_attention(self) -> bool:
@@ -169,19 +186,19 @@ def _grouped(problems, shown=2) -> str:
 
 def chart_rows(summary, limit=None):
     """One dict per chart of ``summary`` (object, chart, method, status, faces, flips, overlap,
-    conformal, area, density: texel density in pixels per metre at the summary's texture size
-    (NaN where not solved), seconds, reason), the ones needing attention first: failed,
+    conformal, area, density: texel density in pixels per metre at the summary's texture size,
+    see :meth:`Summary.px_per_metre` (NaN where not solved), seconds, reason), the ones needing attention first: failed,
     fallback, flipped, overlapping, then by conformal distortion."""
     rows = []
     for name, result in summary.results.items():
-        per_metre = summary.chart_density.get(name)
+        px_per_metre = summary.px_per_metre(name)
         for c in result.charts:
-            uv_per_metre = (float(per_metre[c.id]) if per_metre is not None
-                            and c.id < len(per_metre) else float("nan"))
+            density = (float(px_per_metre[c.id]) if px_per_metre is not None
+                       and c.id < len(px_per_metre) else float("nan"))
             rows.append({"object": name, "chart": c.id, "method": c.method, "status": c.status,
                          "faces": c.faces, "flips": c.flips, "overlap": bool(c.overlap),
                          "conformal": c.conformal, "area": c.area,
-                         "density": uv_per_metre * summary.texture_size, "seconds": c.seconds,
+                         "density": density, "seconds": c.seconds,
                          "reason": c.reason or "", "code": getattr(c, "reason_code", "")})
 
     def attention(row):
@@ -433,10 +450,14 @@ class PackSettings:
     (around others: theirs; whole tile: scaled to fill it; off: where the old UVs were);
     ``MATCH`` the density of the islands left alone in every packing mode (the packer scales
     nothing; as ``AUTO`` when there are none); ``FIXED`` ``texel_density`` pixels per metre of
-    surface (world size, scene units) on a texture of ``texture_size`` pixels, i.e.
-    :attr:`uv_per_metre` UV units per metre, packed without scaling (islands may not fit in
-    the tile: the summary says so). ``texture_size`` also gives the pixels of the per-island
-    densities the summary lists.
+    surface (world size, scene units) on a texture ``texture_size`` pixels wide, i.e.
+    :attr:`uv_per_metre` UV units per metre along U, packed without scaling (islands may not
+    fit in the tile: the summary says so). With Correct Aspect on a texture of aspect ``a``
+    (width / height) the texture is ``texture_size / a`` pixels high, and the islands,
+    corrected for it, get ``texel_density`` pixels per metre along U and along V (see
+    :func:`_fixed_target`). ``texture_size`` also gives the pixels of the per-island densities
+    the summary lists. Every density is per metre of world surface (the object's transform
+    counts, see :func:`world_face_areas`).
     """
 
     mode: str = "AROUND"
@@ -447,11 +468,11 @@ class PackSettings:
     orient: bool = True  # new islands turned to their smallest bounding box first
     density: str = "AUTO"          # AUTO, MATCH or FIXED
     texel_density: float = 1024.0  # pixels per metre (FIXED)
-    texture_size: int = 1024       # texture pixels (FIXED; and the summary's px/m)
+    texture_size: int = 1024       # texture width in pixels (FIXED; and the summary's px/m)
 
     @property
     def uv_per_metre(self) -> float:
-        """UV units per metre of surface of the ``FIXED`` density."""
+        """UV units per metre of surface along U of the ``FIXED`` density."""
         return float(self.texel_density) / float(self.texture_size)
 
     @property
@@ -479,7 +500,7 @@ class _PackPlan:
     tiles: np.ndarray            # (n_islands, 2) UDIM tile of every island
     face_tile: np.ndarray        # (F, 2) UDIM tile of every face (current UVs)
     uv: np.ndarray               # (C, 2) float64: the UVs as they are being packed
-    area3: np.ndarray            # (F,) surface area of every face
+    area3: np.ndarray            # (F,) world surface area of every face (world_face_areas)
     area_uv: np.ndarray          # (F,) UV area of every face (as written)
     matched: np.ndarray | None = None  # (F,) faces whose density the new islands take
     reference: float | None = None  # UV area per surface area of the matched faces
@@ -493,8 +514,9 @@ def _plan(job: _Job, faces, locked, matched=None) -> _PackPlan:
     island = np.full(len(chart), -1, dtype=np.int64)
     island[faces] = inverse
     old = np.zeros_like(written) if job.created_uv else job.old_uv
-    area3, area_uv = packing.face_areas(job.positions, job.corner_verts, job.face_sizes,
-                                        job.triangles, written)
+    # densities are per metre of world surface: islands of objects of different scales (or of
+    # one non-uniformly scaled object) are compared by the texels their world surface gets
+    area3, area_uv = world_face_areas(job, written)
     plan = _PackPlan(job, faces, locked, island,
                      packing.island_tiles(old, job.face_sizes, island, len(ids)),
                      packing.face_tiles(written, job.face_sizes), written.astype(np.float64),
@@ -525,10 +547,8 @@ def _scale_to_density(plans, settings) -> bool:
     else all meshes' together, nothing when there are none; ``FIXED``: its UV units per
     metre, by world surface."""
     if settings.density == "FIXED":
-        target = settings.uv_per_metre ** 2
         for plan in plans:
-            area3, _ = world_face_areas(plan.job, plan.uv)
-            _scale_plan(plan, target, _island_ratio(plan, area3))
+            _scale_plan(plan, _fixed_target(settings, plan.job.aspect), _island_ratio(plan))
         return True
     area3 = sum(float(p.area3[p.matched & (p.area_uv > 0)].sum()) for p in plans)
     area_uv = sum(float(p.area_uv[p.matched & (p.area3 > 0)].sum()) for p in plans)
@@ -541,6 +561,17 @@ def _scale_to_density(plans, settings) -> bool:
     return True
 
 
+def _fixed_target(settings, aspect_=1.0) -> float:
+    """UV area per world surface area of the ``FIXED`` density for islands corrected for a
+    texture of aspect ``aspect_`` (width / height; 1.0 without Correct Aspect).
+
+    The texture is ``W = texture_size`` by ``H = W / aspect_`` pixels; ``D`` pixels per metre
+    along U and along V are ``D / W`` and ``D / H`` UV units per metre: an area ratio of
+    ``D^2 / (W H) = uv_per_metre^2 * aspect_``. The correction has made the islands ``aspect_``
+    times narrower in U than in V already, so scaling them uniformly to that ratio gives both."""
+    return settings.uv_per_metre ** 2 * float(aspect_)
+
+
 def _scale_plan(plan: _PackPlan, target, ratio):
     """Scale every new island of ``plan`` from UV area per surface area ``ratio`` to
     ``target`` (islands without area unchanged)."""
@@ -549,12 +580,11 @@ def _scale_plan(plan: _PackPlan, target, ratio):
     packing.scale_islands(plan.uv, plan.job.face_sizes, plan.island, factors)
 
 
-def _island_ratio(plan: _PackPlan, face_area3=None):
-    """UV area per surface area (``face_area3``, default the plan's) of every new island."""
+def _island_ratio(plan: _PackPlan):
+    """UV area per world surface area of every new island."""
     n = len(plan.tiles)
     inside = plan.island >= 0
-    face_area3 = plan.area3 if face_area3 is None else face_area3
-    area3 = np.bincount(plan.island[inside], weights=face_area3[inside], minlength=n)
+    area3 = np.bincount(plan.island[inside], weights=plan.area3[inside], minlength=n)
     area_uv = np.bincount(plan.island[inside], weights=plan.area_uv[inside], minlength=n)
     with np.errstate(invalid="ignore", divide="ignore"):
         return area_uv / area3
@@ -652,11 +682,7 @@ def _pack(context, jobs, in_mode, active, settings: PackSettings, only=None, pha
         plan.keep_angle = (settings.rotate and aspect.material_aspect(job.obj) != 1.0
                            and job.aspect == 1.0)
         if plan.keep_angle or settings.orient:
-            offsets, points = core.island_hulls(plan.uv, job.face_sizes.astype(np.int64),
-                                                np.maximum(plan.island, 0), selected=plan.faces)
-            if np.all(np.diff(offsets) >= 3):
-                packing.rotate_islands(plan.uv, job.face_sizes, plan.island,
-                                       packing.min_box_angles(offsets, points))
+            _orient(core, plan)
             transformed = True
     tiles = np.unique(np.vstack([p.tiles for p in plans]), axis=0)
     try:
@@ -669,6 +695,24 @@ def _pack(context, jobs, in_mode, active, settings: PackSettings, only=None, pha
         mesh_io.write_uv(plan.job.obj.data, plan.job.uv_name, plan.uv)
     _PACK_REPORT.coverage = _coverage(plans, tiles)
     return False
+
+
+def _orient(core, plan: _PackPlan):
+    """Turn every new island of ``plan`` to its smallest bounding box. Islands corrected for a
+    non-square texture are turned in its pixels (U times the aspect), where they are
+    undistorted: a turn in UV units would shear them."""
+    job = plan.job
+    corners = np.repeat(plan.faces, job.face_sizes)
+    pixels = plan.uv.copy()
+    pixels[corners, 0] *= job.aspect
+    offsets, points = core.island_hulls(pixels, job.face_sizes.astype(np.int64),
+                                        np.maximum(plan.island, 0), selected=plan.faces)
+    if not np.all(np.diff(offsets) >= 3):
+        return
+    packing.rotate_islands(pixels, job.face_sizes, plan.island,
+                           packing.min_box_angles(offsets, points))
+    plan.uv[corners, 0] = pixels[corners, 0] / job.aspect
+    plan.uv[corners, 1] = pixels[corners, 1]
 
 
 def _coverage(plans, tiles):
@@ -1095,6 +1139,7 @@ def _measure_density(jobs, summary: Summary):
         chart = np.asarray(job.result.chart, dtype=np.int64)
         solved = _solved_faces(job)
         n = len(job.result.charts)
+        summary.chart_aspect[job.obj.name] = float(job.aspect)
         with np.errstate(invalid="ignore", divide="ignore"):
             summary.chart_density[job.obj.name] = np.sqrt(
                 np.bincount(chart[solved], weights=area_uv[solved], minlength=n)

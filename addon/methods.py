@@ -387,8 +387,9 @@ def density_properties() -> dict[str, Any]:
         ),
         "texture_size": IntProperty(
             name="Texture Size",
-            description="Texture size in pixels of the Fixed texel density and of the "
-                        "densities the chart list shows",
+            description="Texture width in pixels (along U) of the Fixed texel density and "
+                        "of the densities the chart list shows; with Correct Aspect the height "
+                        "follows the image's aspect",
             default=1024, min=1, max=65536, soft_max=16384, options={"SKIP_SAVE"},
         ),
     }

@@ -642,7 +642,7 @@ def run_single(args, addon, method_props, pack_props) -> int:
             "repairs": repairs,
             "texture_size": summary.texture_size,
             "objects": {name: [dict(chart_report(c), texel_density=_json_number(
-                               summary.texture_size * summary.chart_density[name][c.id])
+                               summary.px_per_metre(name)[c.id])
                                if name in summary.chart_density else "nan")
                                for c in r.charts]
                         for name, r in summary.results.items()},

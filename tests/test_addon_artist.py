@@ -254,6 +254,150 @@ def test_fixed_texel_density_says_when_islands_exceed_the_tile(ext, scene):
     assert io.active_uv_name(obj.data) is not None
 
 
+def world_face_areas(obj):
+    """World surface area of every face of ``obj`` (its matrix_world applied), summed over
+    Blender's render triangles."""
+    io = common.mesh_io()
+    positions, corner_verts, _ = io.read_topology(obj.data)
+    world = positions @ np.array(obj.matrix_world, dtype=np.float64)[:3, :3].T
+    tris, face = loop_triangles(obj)
+    p = world[corner_verts[tris]]
+    area3 = 0.5 * np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
+    return np.bincount(face, area3, len(obj.data.polygons))
+
+
+def px_per_metre_along_u_and_v(obj, uv, faces, width, height):
+    """Texture pixels per metre of world surface along U and along V of ``faces`` together:
+    the area-weighted RMS over their render triangles of ``width * |grad u|`` and ``height *
+    |grad v|`` (the gradients in each triangle's plane, in world metres). An island that is
+    undistorted in the texture's pixels at ``D`` px/m has ``D`` for both."""
+    io = common.mesh_io()
+    positions, corner_verts, _ = io.read_topology(obj.data)
+    world = positions @ np.array(obj.matrix_world, dtype=np.float64)[:3, :3].T
+    tris, face = loop_triangles(obj)
+    tris = tris[faces[face]]
+    p = world[corner_verts[tris]]
+    e1, e2 = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]
+    gram = np.stack([np.stack([np.einsum("ij,ij->i", e1, e1), np.einsum("ij,ij->i", e1, e2)], 1),
+                     np.stack([np.einsum("ij,ij->i", e1, e2), np.einsum("ij,ij->i", e2, e2)], 1)],
+                    1)
+    area = 0.5 * np.sqrt(np.linalg.det(gram))
+    q = np.asarray(uv, dtype=np.float64)[tris]
+    d = np.stack([q[:, 1] - q[:, 0], q[:, 2] - q[:, 0]], 1)  # (T, 2 edges, 2 coordinates)
+    inverse = np.linalg.inv(gram)
+    along = []
+    for k, pixels in ((0, width), (1, height)):
+        # |grad f|^2 = d^T G^-1 d for the in-plane gradient of f with f(e1), f(e2) given
+        grad2 = np.einsum("ti,tij,tj->t", d[:, :, k], inverse, d[:, :, k])
+        along.append(pixels * float(np.sqrt((area * grad2).sum() / area.sum())))
+    return tuple(along)
+
+
+@pytest.mark.parametrize("pack", ["AROUND", "ALL", "OFF"])
+def test_fixed_texel_density_with_correct_aspect_on_a_non_square_texture(ext, scene, pack):
+    """Fixed density with Correct Aspect on a 512 x 256 image: Texture Size is the width (512
+    px along U, so 256 px along V), and every new island gets 300 px per world metre along U
+    and along V (Orient turns islands in the texture's pixels, not in UV units, so none is
+    sheared); the chart list shows 300 px/m."""
+    obj = suzanne()
+    obj.scale = (1.5, 1.5, 1.5)
+    bpy.context.view_layer.update()
+    _material_with_image(obj, 512, 256)
+    io = ext.mesh_io
+    shrink_existing_map(obj)
+    sel = patch(obj, 60)
+    io.select_faces(obj.data, sel)
+    result, summary = unwrap(ext, [obj], select_all=False, method="abf", pack=pack,
+                             correct_aspect=True, density_mode="FIXED", texel_density=300.0,
+                             texture_size=512)
+    assert result == {"FINISHED"}, summary
+    after = read(ext, obj)
+    islands = islands_of(summary, obj, sel)
+    assert islands
+    rows = {r["chart"]: r for r in ext.engine.chart_rows(summary)}
+    for k, faces in islands.items():
+        along_u, along_v = px_per_metre_along_u_and_v(obj, after.uv, faces, 512, 256)
+        assert along_u == pytest.approx(300.0, rel=0.05), \
+            f"island {k}: {along_u:.1f} px/m along U, {along_v:.1f} along V"
+        assert along_v == pytest.approx(300.0, rel=0.05), \
+            f"island {k}: {along_u:.1f} px/m along U, {along_v:.1f} along V"
+        assert rows[k]["density"] == pytest.approx(300.0, rel=0.02), f"island {k}"
+    assert summary.chart_aspect[obj.name] == pytest.approx(2.0)
+
+
+# ---------------------------------------------------------------------------------------------
+# Match Existing and Auto: densities per metre of world surface (object scale counts)
+
+
+def test_match_existing_across_objects_of_different_scales(ext, scene):
+    """Two Suzannes, A at scale 1 and B at scale 2, both in Edit Mode: a patch of A and the
+    whole of B are re-unwrapped with Match Existing. B has no islands left alone, so its new
+    islands take A's density: the same px per *world* metre as A's islands left alone (in the
+    mesh's own units B would get twice that per world metre)."""
+    a = suzanne("A")
+    b = suzanne("B")
+    b.location = (4.0, 0.0, 0.0)
+    b.scale = (2.0, 2.0, 2.0)
+    bpy.context.view_layer.update()
+    io = ext.mesh_io
+    shrink_existing_map(a)
+    sel_a = patch(a, 30)
+    io.select_faces(a.data, sel_a)
+    io.select_all_faces(b.data)
+    area3_a = world_face_areas(a)
+    _, area_uv_a = face_areas(a, read(ext, a).uv)
+    rest = density(area3_a, area_uv_a, ~sel_a)
+    result, summary = unwrap(ext, [a, b], select_all=False, method="abf", pack="ALL",
+                             density_mode="MATCH")
+    assert result == {"FINISHED"}, summary
+    assert summary.density == "MATCH"
+    for obj, sel in ((a, sel_a), (b, np.ones(len(b.data.polygons), dtype=bool))):
+        area3 = world_face_areas(obj)
+        _, area_uv = face_areas(obj, read(ext, obj).uv)
+        for k, faces in islands_of(summary, obj, sel).items():
+            assert density(area3, area_uv, faces) == pytest.approx(rest, rel=0.05), \
+                f"{obj.name} island {k}: {density(area3, area_uv, faces) / rest:.3f} x the density"
+
+
+@pytest.mark.parametrize("pack,density_mode", [("AROUND", "AUTO"), ("AROUND", "MATCH"),
+                                               ("ALL", "MATCH")])
+def test_match_existing_on_a_non_uniformly_scaled_object(ext, scene, pack, density_mode):
+    """Suzanne scaled (1, 1, 3): the faces facing up (normals near z: their world area is about
+    their mesh area) are re-unwrapped; their new islands get the density per world metre of
+    the islands left alone (most of which are stretched by 3 in world space). The density of
+    a face is sqrt(UV area / world area); the unwrap itself works in the mesh's own
+    coordinates, as Blender's does, so a new island is as stretched in world space as the
+    faces it covers."""
+    obj = suzanne()
+    obj.scale = (1.0, 1.0, 3.0)
+    bpy.context.view_layer.update()
+    io = ext.mesh_io
+    shrink_existing_map(obj)
+    normals = np.empty(3 * len(obj.data.polygons))
+    obj.data.polygons.foreach_get("normal", normals)
+    sel = normals.reshape(-1, 3)[:, 2] > 0.8  # the faces facing up
+    io.select_faces(obj.data, sel)
+    area3 = world_face_areas(obj)
+    mesh_area3, area_uv = face_areas(obj, read(ext, obj).uv)
+    # the test can fail: measured in the mesh's own units the patch would get another density
+    stretch = (area3[sel].sum() / mesh_area3[sel].sum()) / (area3[~sel].sum() / mesh_area3[~sel].sum())
+    assert abs(np.sqrt(stretch) - 1.0) > 0.15, stretch
+    rest = density(area3, area_uv, ~sel)
+    result, summary = unwrap(ext, [obj], select_all=False, method="abf", pack=pack,
+                             density_mode=density_mode)
+    assert result == {"FINISHED"}, summary
+    after = read(ext, obj)
+    _, new_area_uv = face_areas(obj, after.uv)
+    assert density(area3, new_area_uv, ~sel) == pytest.approx(rest, rel=1e-6)
+    for k, faces in islands_of(summary, obj, sel).items():
+        assert density(area3, new_area_uv, faces) == pytest.approx(rest, rel=0.05), \
+            f"island {k}: {density(area3, new_area_uv, faces) / rest:.3f} x the density"
+    rows = {r["chart"]: r for r in ext.engine.chart_rows(summary)}
+    for k, faces in islands_of(summary, obj, sel).items():
+        assert rows[k]["density"] == pytest.approx(
+            density(area3, new_area_uv, faces) * summary.texture_size, rel=1e-3)
+
+
 @pytest.mark.parametrize("pack", ["AROUND", "ALL"])
 def test_islands_stay_in_their_udim_tile(ext, scene, pack):
     """Half of Suzanne's islands live in UDIM tile 1002 (u in 1..2): a patch re-unwrapped
