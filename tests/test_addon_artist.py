@@ -464,6 +464,36 @@ def test_thirty_one_face_charts_pack_quickly(ext, scene):
     assert new_cells.any() and not (old_cells & new_cells).any()
 
 
+@pytest.mark.parametrize("pack", ["ALL", "AROUND"])
+def test_two_thousand_islands_are_packed_as_boxes(ext, scene, pack):
+    """The mesh of blender_scripts/pack_benchmark.py: 2,000 separate patches of 2 x 2 quads
+    (and, around others, one big existing island over the lower half of the tile). With the
+    default exact shape asked for, Blender's packer is given bounding boxes, the summary says
+    so, and every new island lands in the tile (Around Others: above the existing island).
+    How long it takes is measured by that script (docs/benchmarks.md), not asserted here."""
+    import pack_benchmark
+
+    assert ext.engine.pack_shape("CONCAVE", 2000) == "AABB"
+    assert ext.engine.pack_shape("CONVEX", 2000) == "AABB"
+    obj = pack_benchmark.build(2000, pack)
+    new = np.zeros(len(obj.data.polygons), dtype=bool)
+    new[:8000] = True
+    before = read(ext, obj)
+    result, summary = unwrap(ext, [obj], select_all=False, method="lscm", pack=pack)
+    assert result == {"FINISHED"}, summary
+    assert summary.charts == 2000, summary.line()
+    assert summary.pack_shape == "CONCAVE" and summary.pack_shapes == ("AABB",)
+    assert "packed as bounding boxes" in summary.line()
+    after = read(ext, obj)
+    corners = corner_mask(new, after.face_sizes)
+    assert after.uv[corners].min() >= -1e-6 and after.uv[corners].max() <= 1 + 1e-6
+    assert np.array_equal(after.uv[~corners], before.uv[~corners])
+    if pack == "AROUND":
+        old_cells = raster(after.uv, after.face_sizes, ~new, 0.0, 1.0)
+        new_cells = raster(after.uv, after.face_sizes, new, 0.0, 1.0)
+        assert new_cells.any() and not (old_cells & new_cells).any()
+
+
 def test_unwrap_that_packs_exact_shapes_takes_the_modal_path(ext, scene):
     """Packing with the exact shape may take Blender's packer more than half a second even on
     a small selection: the operator then runs modal (progress, Esc). A stand-in window
