@@ -517,7 +517,8 @@ def phase_line(uvflat, name, method, positions, corner_verts, face_sizes, xatlas
     p = r.phases
     ratio = f", {seconds / xatlas_row['seconds']:.2f}× xatlas" if xatlas_row else ""
     return (f"- {name} · uvflat {method} phases: build charts {p['build_charts']:.3f} s, "
-            f"plan cuts {p['plan_cuts']:.3f} s, first solves {p['solve']:.3f} s, repair solves "
+            f"plan cuts {p['plan_cuts']:.3f} s ({p.get('predicted_rounds', 0)} predicted rounds), "
+            f"first solves {p['solve']:.3f} s, repair solves "
             f"{p['repair_solve']:.3f} s ({p['repair_rounds']} rounds, {p['repair_pieces']} pieces, "
             f"{p['splits']} splits), measure {p['measure']:.3f} s; whole call {seconds:.3f} s"
             f"{ratio}, {len(r.charts)} islands")

@@ -134,7 +134,8 @@ def main(argv=None):
                          f"{kb:.2f} | {islands} | {rule} |")
             if "phases" in r:
                 p = r["phases"]
-                phases.append(f"{name}×{levels} {job}: plan cuts {p['plan_cuts']:.2f} s, first solves "
+                phases.append(f"{name}×{levels} {job}: plan cuts {p['plan_cuts']:.2f} s "
+                              f"({p.get('predicted_rounds', 0)} predicted rounds), first solves "
                               f"{p['solve']:.2f} s, repair solves {p['repair_solve']:.2f} s "
                               f"({p['repair_rounds']} rounds, {p['repair_pieces']} pieces, "
                               f"{p['splits']} splits)")

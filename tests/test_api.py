@@ -1461,9 +1461,13 @@ def test_phases_account_for_the_pipeline():
     r = uvflat.unwrap(pos, cv, fs, method="abf")
     p = r.phases
     assert set(p) == {"build_charts", "plan_cuts", "solve", "repair_solve", "measure",
-                      "repair_rounds", "repair_pieces", "splits"}
+                      "predicted_rounds", "repair_rounds", "repair_pieces", "splits"}
     assert all(v >= 0 for v in p.values())
     # A closed cube is cut: planned and solved in at least one repair round.
     assert p["repair_rounds"] >= 1 and p["repair_pieces"] >= 1 and p["plan_cuts"] > 0
     r = uvflat.unwrap(pos, cv, fs, method="abf", auto_seams=False)
     assert r.phases["repair_rounds"] == 0 and r.phases["plan_cuts"] == 0
+    assert r.phases["predicted_rounds"] == 0
+    # ABF (conformal) plans the cube's cones on the prediction first; SLIM does not.
+    assert uvflat.unwrap(pos, cv, fs, method="abf").phases["predicted_rounds"] >= 1
+    assert uvflat.unwrap(pos, cv, fs, method="slim").phases["predicted_rounds"] == 0

@@ -1,6 +1,6 @@
 //! Cone placement's scale factor by the capacitance method (one factor per chart) agrees with
 //! a factorization per cone set, on closed and open charts, with the ground vertex among the
-//! cones and without it.
+//! cones and without it (then on a second factor grounded at the first cone).
 
 mod common;
 
@@ -46,10 +46,14 @@ fn check(s: &Soup, name: &str) {
         let closed = !solver.boundary.iter().any(|&b| b);
         for mut cones in cone_sets(n) {
             if closed && !cones.contains(&ground) {
-                // Both paths: without the ground (refactored) and with it (capacitance).
+                // Without the ground: on a second base grounded at the first cone (the same
+                // cone sets grow from one first cone, so that base serves them all).
                 let a = solver.solve(&cones).unwrap();
                 let b = solver.solve_refactored(&cones).unwrap();
-                assert_eq!(a, b, "{name}: without the ground the solve is the refactored one");
+                let scale = b.iter().fold(1e-12f64, |m, x| m.max(x.abs()));
+                let err = a.iter().zip(&b).fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+                assert!(err <= 1e-6 * scale, "{name}: without the ground, difference {err:.3e}");
+                assert!(cones.iter().all(|&c| a[c as usize] == 0.0));
                 cones.insert(0, ground);
             }
             let a = solver.solve(&cones).expect("capacitance solve");

@@ -233,6 +233,30 @@ fn occlusion_is_identical_across_thread_counts() {
 }
 
 #[test]
+fn visibility_from_grid_samples_follows_the_rays_of_every_vertex() {
+    let m = box_with_trench_and_mesa();
+    let mesh = PolyMesh::new(&m.positions, &m.corner_verts, &m.face_sizes).unwrap();
+    let charts = build_charts(&mesh, &[], None);
+    let chart = charts.iter().max_by_key(|c| c.faces.len()).unwrap();
+    let inward = visibility::wound_inward(&mesh);
+    let full = visibility::chart_visibility_sampled(&mesh, chart, inward, usize::MAX);
+    let n = chart.positions.len();
+    let sampled = visibility::chart_visibility_sampled(&mesh, chart, inward, n / 6);
+    assert_ne!(full, sampled, "the chart has {n} vertices: it must have been sampled");
+    let mean_diff = full.iter().zip(&sampled).map(|(a, b)| (a - b).abs()).sum::<f64>() / n as f64;
+    assert!(mean_diff < 0.05, "mean |difference| {mean_diff:.3}");
+    // The trench's floor stays hidden and the mesa's top exposed.
+    let at = |x: f64, y: f64| {
+        let v = top_vertex(x, y);
+        chart.mesh_vertex.iter().position(|&w| w == v).unwrap()
+    };
+    assert!(sampled[at(0.0, 0.6)] < 0.75, "trench floor {:.3}", sampled[at(0.0, 0.6)]);
+    assert!(sampled[at(0.0, -0.6)] > 0.95, "mesa top {:.3}", sampled[at(0.0, -0.6)]);
+    // Below the cap every vertex casts its own rays.
+    assert_eq!(visibility::chart_visibility_sampled(&mesh, chart, inward, n), full);
+}
+
+#[test]
 fn visibility_weight_is_validated() {
     for bad in [-1.0, f64::NAN, f64::INFINITY, 1000.0] {
         let o = AutoSeamOptions { visibility_weight: bad, ..Default::default() };

@@ -188,7 +188,8 @@ impl PyUnwrapResult {
     /// Where the time went, as a dict: ``build_charts``, ``plan_cuts``, ``solve``,
     /// ``repair_solve``, ``measure`` (seconds; the steps of different charts run in parallel,
     /// so ``plan_cuts``, ``solve`` and ``repair_solve`` are summed over threads), and the
-    /// counts ``repair_rounds``, ``repair_pieces`` and ``splits``.
+    /// counts ``predicted_rounds`` (cones planned on a predicted flattening, nothing solved),
+    /// ``repair_rounds``, ``repair_pieces`` and ``splits``.
     #[getter]
     fn phases<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let p = &self.phases;
@@ -198,6 +199,7 @@ impl PyUnwrapResult {
         d.set_item("solve", p.solve)?;
         d.set_item("repair_solve", p.repair_solve)?;
         d.set_item("measure", p.measure)?;
+        d.set_item("predicted_rounds", p.predicted_rounds)?;
         d.set_item("repair_rounds", p.repair_rounds)?;
         d.set_item("repair_pieces", p.repair_pieces)?;
         d.set_item("splits", p.splits)?;

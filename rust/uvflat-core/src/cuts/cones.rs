@@ -22,7 +22,8 @@
 //! `g_c = L₀⁻¹ e_c` (one pair of triangular solves per cone, remembered), the scale factor
 //! with cones `C` is `u = u₀ + Σ_c λ_c g_c` where `G_CC λ = −u₀|_C` (a small dense system), so
 //! trying a cone costs two triangular solves, not a factorization. A closed chart whose cone
-//! set leaves out the ground vertex is refactored with the penalty (the ground must be held).
+//! set leaves out the ground vertex gets a second base factor grounded at the set's first cone
+//! (kept: later rounds keep their first cone), and the capacitance method on it.
 //!
 //! Preconditions: a chart without defects. Degenerate triangles are safe: cotangents come
 //! from clamped angles (every triangle contributes the stiffness of a valid triangle, so `L`
@@ -73,6 +74,9 @@ pub struct ScaleSolver {
     pub boundary: Vec<bool>,
     /// The factor with the boundary (and the ground vertex) held, made on first use.
     base_factor: std::sync::OnceLock<Option<BaseFactor>>,
+    /// On a closed chart, a second base factor grounded at another vertex (the first cone of
+    /// cone sets that leave out the default ground), made on first use.
+    other_base: std::sync::Mutex<Option<std::sync::Arc<BaseFactor>>>,
 }
 
 /// [`ScaleSolver`]'s factor with the boundary and ground held, its solution and the cones'
@@ -92,7 +96,8 @@ impl ScaleSolver {
     pub fn new(chart: &Chart) -> Option<ScaleSolver> {
         let n = chart.positions.len();
         let mut sums = vec![0.0f64; n];
-        let mut map: std::collections::HashMap<(u32, u32), f64> = std::collections::HashMap::new();
+        // Lower-triangle triplets (row ≥ col), merged by sorting (no hashing on large charts).
+        let mut triplets: Vec<(u32, u32, f64)> = Vec::with_capacity(9 * chart.triangles.len() + n);
         for t in &chart.triangles {
             let p = [chart.positions[t[0] as usize], chart.positions[t[1] as usize], chart.positions[t[2] as usize]];
             let a = clamped_angles(p);
@@ -100,20 +105,25 @@ impl ScaleSolver {
                 sums[t[k] as usize] += a[k];
                 let (i, j) = (t[(k + 1) % 3], t[(k + 2) % 3]);
                 let w = 0.5 / a[k].tan();
-                let key = (i.max(j), i.min(j));
-                *map.entry(key).or_insert(0.0) -= w;
-                *map.entry((i, i)).or_insert(0.0) += w;
-                *map.entry((j, j)).or_insert(0.0) += w;
+                triplets.push((i.max(j), i.min(j), -w));
+                triplets.push((i, i, w));
+                triplets.push((j, j, w));
             }
         }
         let boundary = chart.boundary_mask();
         let defect: Vec<f64> =
             (0..n).map(|v| if boundary[v] { PI - sums[v] } else { 2.0 * PI - sums[v] }).collect();
         for v in 0..n as u32 {
-            map.entry((v, v)).or_insert(0.0);
+            triplets.push((v, v, 0.0));
         }
-        let mut entries: Vec<(u32, u32, f64)> = map.into_iter().map(|((r, c), w)| (r, c, w)).collect();
-        entries.sort_unstable_by_key(|e| (e.1, e.0));
+        triplets.sort_by_key(|e| (e.1, e.0));
+        let mut entries: Vec<(u32, u32, f64)> = Vec::with_capacity(triplets.len() / 3);
+        for (r, c, w) in triplets {
+            match entries.last_mut() {
+                Some(last) if last.0 == r && last.1 == c => last.2 += w,
+                _ => entries.push((r, c, w)),
+            }
+        }
         let mean_diag = entries.iter().filter(|e| e.0 == e.1).map(|e| e.2.abs()).sum::<f64>() / n.max(1) as f64;
         let max_diag = entries.iter().filter(|e| e.0 == e.1).map(|e| e.2.abs()).fold(0.0, f64::max);
         let eps = 1e-8 * mean_diag.max(1e-300);
@@ -130,15 +140,42 @@ impl ScaleSolver {
                 base.push(e.2);
             }
         }
-        Some(ScaleSolver { n, base, diag, entries, symbolic, argsort, llt, penalty: 1e8 * max_diag.max(1e-300), defect, boundary, base_factor: std::sync::OnceLock::new() })
+        Some(ScaleSolver { n, base, diag, entries, symbolic, argsort, llt, penalty: 1e8 * max_diag.max(1e-300), defect, boundary, base_factor: std::sync::OnceLock::new(), other_base: Default::default() })
     }
 
     /// Solve for `u` with `fixed` vertices (and the boundary) held at zero.
     pub fn solve(&self, fixed: &[u32]) -> Option<Vec<f64>> {
         match self.base() {
             Some(base) if base.ground.is_none_or(|g| fixed.contains(&g)) => self.solve_on_base(base, fixed),
+            // A closed chart whose cones leave out the ground: a base grounded at the first
+            // cone (repair rounds keep their first cone, so one such factor serves them all).
+            Some(_) if !fixed.is_empty() => match self.other_base(fixed[0]) {
+                Some(base) => self.solve_on_base(&base, fixed),
+                None => self.solve_refactored(fixed),
+            },
             _ => self.solve_refactored(fixed),
         }
+    }
+
+    /// The base factor of a closed chart grounded at `ground`, kept until another ground is
+    /// asked for.
+    fn other_base(&self, ground: u32) -> Option<std::sync::Arc<BaseFactor>> {
+        let mut slot = self.other_base.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(b) = slot.as_ref().filter(|b| b.ground == Some(ground)) {
+            return Some(b.clone());
+        }
+        let (llt, u0) = self.factor_and_solve(&[ground])?;
+        let b = std::sync::Arc::new(BaseFactor { llt, ground: Some(ground), u0, green: Default::default() });
+        *slot = Some(b.clone());
+        Some(b)
+    }
+
+    /// `u` with only the boundary (or, on a closed chart, the ground vertex) held: on a disk,
+    /// the log scale factor of the conformal flattening that keeps the outline's lengths
+    /// (Sawhney & Crane 2017, boundary first flattening with `u = 0` on the boundary, the
+    /// flattening of least area distortion among those). `None` if the factorization failed.
+    pub fn base_u(&self) -> Option<&[f64]> {
+        self.base().map(|b| b.u0.as_slice())
     }
 
     /// The base factor (boundary and ground held), made once.

@@ -264,6 +264,8 @@ pub struct ChartCutter<'a> {
     min_cones: usize,
     solver: Option<cones::ScaleSolver>,
     mirror: Option<symmetry::Mirror>,
+    /// The handle loops of the last cut and their root (they depend on the root only).
+    loops: std::sync::Mutex<Option<(u32, Vec<bool>)>>,
 }
 
 impl<'a> ChartCutter<'a> {
@@ -306,7 +308,7 @@ impl<'a> ChartCutter<'a> {
             (true, _) => 1,
             (false, _) => 0,
         };
-        ChartCutter { chart, options, graph, cost, allowed, boundary, min_cones, solver: cones::ScaleSolver::new(chart), mirror }
+        ChartCutter { chart, options, graph, cost, allowed, boundary, min_cones, solver: cones::ScaleSolver::new(chart), mirror, loops: Default::default() }
     }
 
     /// The chart's mirror, when [`AutoSeamOptions::symmetry`] asked for one and found it.
@@ -327,6 +329,35 @@ impl<'a> ChartCutter<'a> {
     /// Per chart vertex: whether it may become a cone (inside the chart, not avoided).
     pub fn allowed(&self) -> &[bool] {
         &self.allowed
+    }
+
+    /// The predicted share of the chart's 3D area outside `[1/s, s]` of its own density when
+    /// it is flattened conformally as it is, without cuts (`s` = Max Stretch): triangle `t`
+    /// gets the area ratio `exp(2 ū_t)` (`ū_t` the mean over its corners of
+    /// [`cones::ScaleSolver::base_u`]), relative to the chart's area-weighted mean. A lower
+    /// bound, roughly, for a free-boundary conformal map (LSCM, ABF), whose outline is not
+    /// held to its 3D lengths. `None` on a chart without a boundary or when the system failed.
+    pub fn predicted_outside(&self) -> Option<f64> {
+        predicted_outside(self.chart, self.solver.as_ref()?, self.options.max_stretch)
+    }
+
+    /// `(predicted density ratio, 3D area)` per triangle of the chart (in `chart.triangles`
+    /// order) once cut along `cut`, when the cut leaves it in one piece: the flattening of
+    /// [`Self::predicted_outside`] for that piece. The piece's interior equations are the
+    /// chart's (cutting changes no angle), and `u = 0` on both sides of a cut edge is `u = 0`
+    /// at its vertices, so the chart's own system with the cut's vertices held gives it: one
+    /// numeric factorization on the chart's analysis, no new chart, ordering or assembly.
+    /// `None` when the system failed.
+    pub fn predicted_ratios_after(&self, cut: &ChartCuts) -> Option<Vec<(f64, f64)>> {
+        let solver = self.solver.as_ref()?;
+        let mut fixed: Vec<u32> = cut.edges.iter().flat_map(|e| [e[0], e[1]]).collect();
+        fixed.sort_unstable();
+        fixed.dedup();
+        if fixed.is_empty() && self.chart.boundary_loops.is_empty() {
+            return None;
+        }
+        let u = solver.solve_refactored(&fixed)?;
+        ratios_of(self.chart, &u)
     }
 
     /// Cones and cut for this round (arguments as in [`cut_chart`]).
@@ -413,7 +444,16 @@ impl<'a> ChartCutter<'a> {
         let (chart, graph, cost) = (self.chart, &self.graph, &self.cost);
         let loops = if chart.genus > 0 {
             let root = cone_vertices.first().copied().or_else(|| chart.boundary_loops.first().map(|l| l[0])).unwrap_or(0);
-            cut_graph::handle_loops(graph, cost, root, &chart.boundary_loops)
+            // Repair rounds keep their first cone: the loops of one root are found once.
+            let mut cached = self.loops.lock().unwrap_or_else(|e| e.into_inner());
+            match cached.as_ref() {
+                Some((r, l)) if *r == root => l.clone(),
+                _ => {
+                    let l = cut_graph::handle_loops(graph, cost, root, &chart.boundary_loops);
+                    *cached = Some((root, l.clone()));
+                    l
+                }
+            }
         } else {
             vec![false; graph.edges.len()]
         };
@@ -432,4 +472,40 @@ fn mirrored(cones: &[u32], mirror: &symmetry::Mirror) -> Vec<u32> {
         }
     }
     out
+}
+
+/// [`ChartCutter::predicted_outside`] of `chart` with its scale system `solver`, against
+/// `[1/s, s]`.
+pub fn predicted_outside(chart: &Chart, solver: &cones::ScaleSolver, s: f64) -> Option<f64> {
+    Some(crate::metrics::density::spread_of(predicted_ratios(chart, solver)?, s).outside)
+}
+
+/// `(predicted density ratio, 3D area)` per triangle of `chart` flattened conformally with its
+/// outline's lengths kept ([`ChartCutter::predicted_outside`]), the ratios relative to the
+/// chart's area-weighted mean. `None` on a chart without a boundary or when the system failed.
+pub fn predicted_ratios(chart: &Chart, solver: &cones::ScaleSolver) -> Option<Vec<(f64, f64)>> {
+    if chart.boundary_loops.is_empty() {
+        return None;
+    }
+    ratios_of(chart, solver.base_u()?)
+}
+
+/// `(e^{2ū} / mean, 3D area)` per triangle of `chart` for the log scale factor `u` (`ū` the
+/// mean over the triangle's corners; the mean area-weighted). `None` without area.
+fn ratios_of(chart: &Chart, u: &[f64]) -> Option<Vec<(f64, f64)>> {
+    let samples: Vec<(f64, f64)> = chart
+        .triangles
+        .iter()
+        .map(|t| {
+            let p = [chart.positions[t[0] as usize], chart.positions[t[1] as usize], chart.positions[t[2] as usize]];
+            let ubar = (u[t[0] as usize] + u[t[1] as usize] + u[t[2] as usize]) / 3.0;
+            ((2.0 * ubar).exp(), crate::geometry::triangle_area(p))
+        })
+        .collect();
+    let total: f64 = samples.iter().map(|s| s.1).sum();
+    let mean = samples.iter().map(|s| s.0 * s.1).sum::<f64>() / total;
+    if !(mean > 0.0 && mean.is_finite()) {
+        return None;
+    }
+    Some(samples.into_iter().map(|(r, a)| (r / mean, a)).collect())
 }

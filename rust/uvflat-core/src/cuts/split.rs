@@ -121,9 +121,14 @@ pub fn spectral_halve(graph: &ChartGraph, cost: &[f64], chart: &Chart) -> Option
         below += area[p];
     }
     let neighbours = dual_adjacency(graph);
+    // The levels' cuts are independent: computed in parallel, compared in level order.
+    let splits: Vec<Option<Split>> = {
+        use rayon::prelude::*;
+        LEVELS.par_iter().map(|&q| cut_at_level(graph, cost, chart, &quantile, &area, total, &neighbours, q)).collect()
+    };
     let mut best: Option<(bool, f64, Split)> = None;
-    for &q in &LEVELS {
-        let Some(split) = cut_at_level(graph, cost, chart, &quantile, &area, total, &neighbours, q) else { continue };
+    for split in splits {
+        let Some(split) = split else { continue };
         let key = (split.parts != 2, split.cost * (1.0 + (split.area_share - 0.5).abs()));
         if best.as_ref().is_none_or(|b| (key.0, key.1) < (b.0, b.1)) {
             best = Some((key.0, key.1, split));

@@ -354,6 +354,16 @@ pub fn wound_inward(mesh: &PolyMesh<'_>) -> bool {
 /// shade the chart too. `inward`: the mesh is wound inwards ([`wound_inward`]), and the
 /// outside is behind the triangles' normals.
 pub fn chart_visibility(mesh: &PolyMesh<'_>, chart: &Chart, inward: bool) -> Vec<f64> {
+    chart_visibility_sampled(mesh, chart, inward, SAMPLES)
+}
+
+/// [`chart_visibility`] with rays cast from at most about `max_samples` vertices: on a larger
+/// chart, one vertex per cell of a grid sized for that many cells on the chart's surface (the
+/// lowest vertex id in the cell), every other vertex taking the value of the sample nearest
+/// it in edge hops (a breadth-first search from all samples at once, in sample order).
+/// Occlusion varies over the scale of the rays' range, far coarser than a scan's triangles,
+/// so the samples lose little while the rays' cost stops growing with the mesh.
+pub fn chart_visibility_sampled(mesh: &PolyMesh<'_>, chart: &Chart, inward: bool, max_samples: usize) -> Vec<f64> {
     let n = chart.positions.len();
     let (lo, hi) = bounds(chart.positions.iter());
     let range = RANGE * norm(sub(hi, lo));
@@ -381,7 +391,96 @@ pub fn chart_visibility(mesh: &PolyMesh<'_>, chart: &Chart, inward: bool) -> Vec
         }
     }
     let bvh = Bvh::new(occluders);
-    occlusion_at(&bvh, &chart.positions, &normals, RAYS, range).into_iter().map(|a| 1.0 - a).collect()
+    let Some(samples) = grid_samples(chart, max_samples) else {
+        return occlusion_at(&bvh, &chart.positions, &normals, RAYS, range).into_iter().map(|a| 1.0 - a).collect();
+    };
+    let points: Vec<[f64; 3]> = samples.iter().map(|&v| chart.positions[v as usize]).collect();
+    let sample_normals: Vec<[f64; 3]> = samples.iter().map(|&v| normals[v as usize]).collect();
+    let occ = occlusion_at(&bvh, &points, &sample_normals, RAYS, range);
+    spread_from_samples(chart, &samples, &occ).into_iter().map(|a| 1.0 - a).collect()
+}
+
+/// Most vertices of a chart that cast their own rays ([`chart_visibility_sampled`]).
+pub const SAMPLES: usize = 12_000;
+
+/// One vertex per occupied cell of a grid whose cells are sized so the chart's surface meets
+/// about `max_samples` of them (the lowest vertex id in each cell, in increasing order), or
+/// `None` when the chart has at most `max_samples` vertices.
+fn grid_samples(chart: &Chart, max_samples: usize) -> Option<Vec<u32>> {
+    let n = chart.positions.len();
+    if n <= max_samples.max(1) {
+        return None;
+    }
+    let area: f64 = chart
+        .triangles
+        .iter()
+        .map(|t| {
+            let p = [chart.positions[t[0] as usize], chart.positions[t[1] as usize], chart.positions[t[2] as usize]];
+            0.5 * norm(cross(sub(p[1], p[0]), sub(p[2], p[0])))
+        })
+        .sum();
+    // A surface crosses about 1.5 cells per cell-face of its area (it runs at a slant).
+    let h = (1.5 * area / max_samples as f64).sqrt();
+    if !(h > 0.0 && h.is_finite()) {
+        return None;
+    }
+    let (lo, _) = bounds(chart.positions.iter());
+    let mut cells: std::collections::HashMap<[i64; 3], u32> = std::collections::HashMap::new();
+    for (v, p) in chart.positions.iter().enumerate() {
+        let key = [((p[0] - lo[0]) / h) as i64, ((p[1] - lo[1]) / h) as i64, ((p[2] - lo[2]) / h) as i64];
+        cells.entry(key).or_insert(v as u32);
+    }
+    let mut samples: Vec<u32> = cells.into_values().collect();
+    samples.sort_unstable();
+    Some(samples)
+}
+
+/// Per chart vertex, the value of the sample fewest edges away (`values[k]` belongs to
+/// `samples[k]`; ties go to the sample reached first in sample order). A vertex no sample
+/// reaches (a chart in several pieces would have one) gets 0.
+fn spread_from_samples(chart: &Chart, samples: &[u32], values: &[f64]) -> Vec<f64> {
+    let n = chart.positions.len();
+    let mut start = vec![0u32; n + 1];
+    for t in &chart.triangles {
+        for &v in t {
+            start[v as usize + 1] += 2;
+        }
+    }
+    for v in 0..n {
+        start[v + 1] += start[v];
+    }
+    let mut fill = start.clone();
+    let mut adj = vec![0u32; start[n] as usize];
+    for t in &chart.triangles {
+        for k in 0..3 {
+            let (a, b, c) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
+            for w in [b, c] {
+                adj[fill[a as usize] as usize] = w;
+                fill[a as usize] += 1;
+            }
+        }
+    }
+    let mut out = vec![f64::NAN; n];
+    let mut queue = std::collections::VecDeque::with_capacity(n);
+    for (k, &s) in samples.iter().enumerate() {
+        out[s as usize] = values[k];
+        queue.push_back(s);
+    }
+    while let Some(v) = queue.pop_front() {
+        let x = out[v as usize];
+        for &w in &adj[start[v as usize] as usize..start[v as usize + 1] as usize] {
+            if out[w as usize].is_nan() {
+                out[w as usize] = x;
+                queue.push_back(w);
+            }
+        }
+    }
+    for x in &mut out {
+        if x.is_nan() {
+            *x = 0.0;
+        }
+    }
+    out
 }
 
 /// Axis-aligned bounds of points.

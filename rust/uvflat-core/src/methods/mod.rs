@@ -458,6 +458,14 @@ impl Method {
             Method::Harmonic { .. } | Method::Lscm | Method::Spectral(_) | Method::Arap(_) => false,
         }
     }
+
+    /// Whether the method trades angle distortion for area distortion (ARAP, SLIM, MIPS,
+    /// scaffold). The others (conformal maps and fixed-boundary maps) spread area at least
+    /// about as much as the conformal flattening that keeps the outline's lengths, so that
+    /// flattening predicts when they break Max Stretch ([`crate::pipeline::triage`]).
+    pub fn balances_area(&self) -> bool {
+        matches!(self, Method::Arap(_) | Method::Slim(_) | Method::Mips(_) | Method::Scaffold(_))
+    }
 }
 
 /// The chart in a unit frame: positions moved to the centre of their bounding box and divided

@@ -10,8 +10,13 @@
 //!    holes are cut first; disks are solved as they are and repaired only if they break the
 //!    rule; pinned disks and charts with a defect are never cut. With automatic seams off
 //!    every chart is solved as it is.
+//!    A disk solved by a method that does not balance area is cut first when its predicted
+//!    flattening ([`crate::cuts::ChartCutter::predicted_outside`]) breaks Max Stretch by far.
 //! 2. Plan cuts: [`crate::cuts::ChartCutter`] (cones on the conformal scale factor, handle
-//!    loops, holes and cones joined to the outline by a Steiner tree of low-cost edges).
+//!    loops, holes and cones joined to the outline by a Steiner tree of low-cost edges), and
+//!    [`predict::plan`]: more cones while the predicted flattening of a piece breaks Max
+//!    Stretch, one factorization per round instead of a solve (methods that balance area
+//!    start from the cutter's cones as they are).
 //! 3. Solve: [`solve::solve_chart`] maps a piece with the user's method, places and measures
 //!    it.
 //! 4. Check: [`rule::AtlasRule`] (a disk, no flips, an outline that does not cross itself,
@@ -24,6 +29,7 @@
 
 pub mod outcome;
 pub mod phases;
+pub mod predict;
 pub mod repair;
 pub mod rule;
 pub mod solve;
@@ -122,7 +128,20 @@ pub(crate) fn run(ctx: &Context<'_, '_>, chart: Chart, base_seams: &[[u32; 2]], 
 fn road(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], depth: usize) -> Vec<Piece> {
     let road = triage::triage(chart, ctx.options.auto_seams.enabled, pinned(ctx, chart));
     if road == Triage::Cut {
-        return repair::repair(ctx, chart, base_seams, depth, None);
+        return repair::repair(ctx, chart, base_seams, depth, None, None);
+    }
+    let mut cutter = None;
+    if road == Triage::SolveThenRepair && !ctx.options.method.balances_area() {
+        // A disk whose conformal flattening is predicted to break Max Stretch by far is cut
+        // before any solve (the solve as it is would be thrown away).
+        let t = std::time::Instant::now();
+        let c = repair::cutter(ctx, chart);
+        let predicted = c.predicted_outside();
+        ctx.clock.add(|p| p.plan_cuts += t.elapsed().as_secs_f64());
+        if predicted.is_some_and(|o| o > triage::PREDICTED_BREAK) {
+            return repair::repair(ctx, chart, base_seams, depth, None, Some(c));
+        }
+        cutter = Some(c);
     }
     let t = std::time::Instant::now();
     let (report, uv, face_flips) = solve::solve_chart(chart, ctx.pins, ctx.options, &ctx.rule);
@@ -130,7 +149,7 @@ fn road(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], depth: us
     let broken = !report.status.mapped() || ctx.rule.broken(&report).is_some();
     let first = Piece { chart: None, report, uv, face_flips, seams: Vec::new(), area: chart_area(chart) };
     if road == Triage::SolveThenRepair && broken {
-        repair::repair(ctx, chart, base_seams, depth, Some(first))
+        repair::repair(ctx, chart, base_seams, depth, Some(first), cutter)
     } else {
         vec![first]
     }

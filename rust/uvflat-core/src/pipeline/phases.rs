@@ -22,6 +22,9 @@ pub struct Phases {
     pub repair_pieces: usize,
     /// Repair rounds run (a round: one cut of one chart, all its pieces solved).
     pub repair_rounds: usize,
+    /// Prediction rounds run ([`crate::pipeline::predict`]: one cut of one chart, each piece's
+    /// flattening predicted by one factorization, nothing solved).
+    pub predicted_rounds: usize,
     /// Charts halved by the last-resort split.
     pub splits: usize,
     /// Per-face quality of the result (wall clock).

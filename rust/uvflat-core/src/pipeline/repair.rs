@@ -2,12 +2,17 @@
 //!
 //! Precedents: xatlas's piecewise parameterization and PartUV's split-until-valid. Round 0
 //! cuts the chart as planned by [`crate::cuts::ChartCutter`] (cones on the scale factor, handle
-//! loops, holes joined to the outline); each further round adds a cone in each of the
+//! loops, holes joined to the outline), with the cones [`super::predict::plan`] added where the
+//! predicted flattening breaks Max Stretch (for methods that do not balance area; when the
+//! prediction cannot keep the rule, round 0 is the only round before the split); each further
+//! round adds a cone in each of the
 //! largest crushed regions of the first piece that breaks the rule (up to
 //! `CONES_PER_ROUND`; a flip or zero-area triangle counts as crushed), and re-cuts. A round
 //! that does not bring the chart clearly nearer the rule (`PROGRESS`) is not built on: after
 //! several cones at once, the rounds go back to the best attempt and add one cone at a time;
-//! after one cone, they end and the chart is split (each round is a whole solve). The
+//! after one cone, they end and the chart is split (each round is a whole solve). An attempt
+//! whose only problem is an outline that crosses itself gets one more round with one cone at
+//! most (several cones rarely uncross an outline; a split does). The
 //! best attempt is kept (fewest failures, flips, overlaps, non-disks, then the least area
 //! beyond the density bound, then the fewest pieces). When no round keeps the rule, the chart
 //! is halved ([`crate::cuts::split`], along the cheapest loop by the cutter's edge costs) and
@@ -25,13 +30,26 @@ use crate::charts::{build_charts_with, Chart};
 use crate::cuts::{self, ChartCutter};
 use crate::mesh::PolyMesh;
 
+/// The cutting state of `chart` for [`repair`]: graph, costs and the scale system's analysis,
+/// made once (each round refactors numerically).
+pub fn cutter<'a>(ctx: &'a Context<'_, '_>, chart: &'a Chart) -> ChartCutter<'a> {
+    ChartCutter::with_cache(ctx.mesh, chart, &ctx.options.auto_seams, ctx.avoid, Some(&ctx.visibility))
+}
+
 /// Repair `chart` (already cut along `base_seams`). `first`: the chart solved as it is, if it
-/// was (it is one of the attempts). Returns the best pieces found.
-pub fn repair(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], depth: usize, first: Option<Piece>) -> Vec<Piece> {
+/// was (it is one of the attempts); `cutter`: its [`cutter`], if made already. Returns the
+/// best pieces found.
+pub fn repair<'a>(
+    ctx: &'a Context<'_, '_>,
+    chart: &'a Chart,
+    base_seams: &[[u32; 2]],
+    depth: usize,
+    first: Option<Piece>,
+    cutter: Option<ChartCutter<'a>>,
+) -> Vec<Piece> {
     let t = std::time::Instant::now();
     let mask = face_mask(ctx.mesh.n_faces(), chart);
-    // Graph, costs and the scale system's analysis once; each round refactors numerically.
-    let cutter = ChartCutter::with_cache(ctx.mesh, chart, &ctx.options.auto_seams, ctx.avoid, Some(&ctx.visibility));
+    let cutter = cutter.unwrap_or_else(|| self::cutter(ctx, chart));
     ctx.clock.add(|p| p.plan_cuts += t.elapsed().as_secs_f64());
     let mut seed: Vec<u32> = Vec::new();
     let mut best: Vec<Piece> = Vec::new();
@@ -46,13 +64,28 @@ pub fn repair(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], dep
     let mut best_cones: Vec<u32> = Vec::new();
     let mut best_next: Vec<u32> = seed.clone();
     let mut single = false;
-    for round in 0..=cuts::REPAIR_ROUNDS {
+    // The cones planned on the prediction ([`super::predict`]); when the prediction could not
+    // keep the rule, more cones will not either: one solve of the best plan, then the split.
+    // Methods that balance area (SLIM, ARAP, MIPS, scaffold) often keep the rule where the
+    // conformal prediction breaks it: they start from the cutter's cones as they are.
+    let (rounds, mut planned) = if ctx.options.method.balances_area() {
+        (cuts::REPAIR_ROUNDS, None)
+    } else {
+        let t = std::time::Instant::now();
+        let plan = super::predict::plan(ctx, chart, &cutter, base_seams, &mask, &seed);
+        ctx.clock.add(|p| p.plan_cuts += t.elapsed().as_secs_f64());
+        (if plan.keeps_rule { cuts::REPAIR_ROUNDS } else { 0 }, plan.cut)
+    };
+    for round in 0..=rounds {
         if crate::progress::cancelled() {
             // The unwrap is discarded: no more solves.
             return best;
         }
         let t = std::time::Instant::now();
-        let cut = cutter.cut(&seed, round);
+        let cut = match planned.take() {
+            Some(cut) => cut,
+            None => cutter.cut(&seed, round),
+        };
         if cut.seams.is_empty() && !best.is_empty() {
             break;
         }
@@ -82,6 +115,8 @@ pub fn repair(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], dep
             p.repair_rounds += 1;
         });
         let valid = all_valid(ctx, &pieces);
+        let ((_, flips, _, _), excess) = badness(ctx, &pieces);
+        let only_outline = flips == 0 && excess <= 0.0;
         let next: Vec<u32> = pieces
             .iter()
             .find(|p| ctx.rule.broken(&p.report).is_some() || !p.report.status.mapped())
@@ -100,7 +135,12 @@ pub fn repair(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], dep
         if valid {
             break;
         }
-        if progress && !next.is_empty() {
+        if only_outline && single {
+            // Still only an outline that crosses itself after a one-cone round: more cones
+            // do not uncross it, a split does.
+            break;
+        }
+        if progress && !next.is_empty() && !only_outline {
             seed = cut.cones.clone();
             seed.extend(next.into_iter().take(if single { 1 } else { CONES_PER_ROUND }));
         } else if !single && !best_next.is_empty() {
@@ -196,10 +236,10 @@ fn clearly_better(ctx: &Context<'_, '_>, a: &[Piece], b: &[Piece]) -> bool {
 
 /// A repair round must leave at most this share of the best attempt's area beyond the
 /// density bound to earn another round.
-const PROGRESS: f64 = 0.9;
+pub(crate) const PROGRESS: f64 = 0.9;
 
 /// Most cones one repair round adds.
-const CONES_PER_ROUND: usize = 4;
+pub(crate) const CONES_PER_ROUND: usize = 4;
 
 /// Cones for the next round: one in each of the largest crushed regions of `piece` (up to
 /// [`CONES_PER_ROUND`]). A region is a vertex-connected set of triangles whose density ratio
@@ -210,8 +250,22 @@ fn crushed_vertices(original: &Chart, piece: &Piece, allowed: &[bool], exclude: 
     let fallback = || worst_vertex(original, piece, allowed, exclude).into_iter().collect();
     let Some(uv) = piece.uv.as_ref() else { return fallback() };
     let chart = piece.chart.as_ref().unwrap_or(original);
-    let to_original = piece_to_original(original, chart);
     let ratios = crate::metrics::density::density_ratios(&chart.positions, &chart.triangles, uv);
+    let out = crushed_regions(original, chart, &ratios, allowed, exclude, s);
+    if out.is_empty() {
+        return fallback();
+    }
+    out
+}
+
+/// One cone in each of the largest crushed regions of `chart` (a piece of `original`) by its
+/// triangles' `(density ratio, 3D area)`, up to [`CONES_PER_ROUND`], as vertices of
+/// `original`: see [`crushed_vertices`]. Empty when no triangle is crushed.
+pub(crate) fn crushed_regions(original: &Chart, chart: &Chart, ratios: &[(f64, f64)], allowed: &[bool], exclude: &[u32], s: f64) -> Vec<u32> {
+    if ratios.len() != chart.triangles.len() {
+        return Vec::new();
+    }
+    let to_original = piece_to_original(original, chart);
     let low = 1.0 / s;
     // Union-find over the vertices of crushed triangles.
     let mut parent: Vec<u32> = (0..chart.positions.len() as u32).collect();
@@ -224,7 +278,7 @@ fn crushed_vertices(original: &Chart, piece: &Piece, allowed: &[bool], exclude: 
     }
     let crushed: Vec<usize> = (0..chart.triangles.len()).filter(|&t| ratios[t].0 < low).collect();
     if crushed.is_empty() {
-        return fallback();
+        return Vec::new();
     }
     for &t in &crushed {
         let [a, b, c] = chart.triangles[t];
@@ -261,14 +315,14 @@ fn crushed_vertices(original: &Chart, piece: &Piece, allowed: &[bool], exclude: 
             }
         }
     }
-    if out.is_empty() {
-        return fallback();
-    }
     out
 }
 
 /// Piece vertex → vertex of `original` through the shared corners (`u32::MAX`: none).
 fn piece_to_original(original: &Chart, chart: &Chart) -> Vec<u32> {
+    if std::ptr::eq(original, chart) {
+        return (0..chart.positions.len() as u32).collect();
+    }
     let mut corner_to_original = std::collections::HashMap::with_capacity(original.corner_vertex.len());
     for &(c, v) in &original.corner_vertex {
         corner_to_original.insert(c, v);

@@ -362,3 +362,58 @@ pub fn cube_sphere(n: usize) -> Soup {
     }
     Soup { positions, corner_verts: cv, face_sizes: fs }
 }
+
+/// A latitude–longitude sphere of radius 1: `nu` segments, `nv` rings (quads, triangle fans
+/// at the poles). Faces for which `keep(centroid)` is false are left out.
+pub fn sphere(nu: usize, nv: usize, keep: impl Fn([f64; 3]) -> bool) -> Soup {
+    let mut positions = vec![[0.0, 0.0, 1.0]];
+    for j in 1..nv {
+        let t = std::f64::consts::PI * j as f64 / nv as f64;
+        for i in 0..nu {
+            let a = std::f64::consts::TAU * i as f64 / nu as f64;
+            positions.push([t.sin() * a.cos(), t.sin() * a.sin(), t.cos()]);
+        }
+    }
+    positions.push([0.0, 0.0, -1.0]);
+    let south = (positions.len() - 1) as u32;
+    let ring = |j: usize, i: usize| (1 + (j - 1) * nu + i % nu) as u32;
+    let mut faces: Vec<Vec<u32>> = Vec::new();
+    for i in 0..nu {
+        faces.push(vec![0, ring(1, i), ring(1, i + 1)]);
+    }
+    for j in 1..nv - 1 {
+        for i in 0..nu {
+            faces.push(vec![ring(j, i), ring(j + 1, i), ring(j + 1, i + 1), ring(j, i + 1)]);
+        }
+    }
+    for i in 0..nu {
+        faces.push(vec![ring(nv - 1, i), south, ring(nv - 1, i + 1)]);
+    }
+    soup_of(positions, faces, keep)
+}
+
+/// A soup of the faces whose centroid `keep` accepts, unused vertices dropped.
+pub fn soup_of(positions: Vec<[f64; 3]>, faces: Vec<Vec<u32>>, keep: impl Fn([f64; 3]) -> bool) -> Soup {
+    let mut used = vec![u32::MAX; positions.len()];
+    let mut out = Soup { positions: Vec::new(), corner_verts: Vec::new(), face_sizes: Vec::new() };
+    for f in faces {
+        let mut c = [0.0; 3];
+        for &v in &f {
+            for k in 0..3 {
+                c[k] += positions[v as usize][k] / f.len() as f64;
+            }
+        }
+        if !keep(c) {
+            continue;
+        }
+        for &v in &f {
+            if used[v as usize] == u32::MAX {
+                used[v as usize] = out.positions.len() as u32;
+                out.positions.push(positions[v as usize]);
+            }
+            out.corner_verts.push(used[v as usize]);
+        }
+        out.face_sizes.push(f.len() as u32);
+    }
+    out
+}

@@ -206,7 +206,7 @@ class UnwrapResult:
     def phases(self) -> dict[str, float | int]:
         """Where the time went: ``build_charts``, ``plan_cuts``, ``solve``, ``repair_solve``,
         ``measure`` (seconds; per-chart steps summed over threads) and the counts
-        ``repair_rounds``, ``repair_pieces``, ``splits``."""
+        ``predicted_rounds``, ``repair_rounds``, ``repair_pieces``, ``splits``."""
     def as_dict(self) -> dict[str, Any]:
         """All fields as a plain dict (arrays included, chart reports as dicts)."""
 

@@ -1,0 +1,93 @@
+//! The predicted flattening (conformal, outline lengths kept) that plans cones before any
+//! solve: exact on a flat disk, growing with the curvature of a spherical cap, close to what
+//! ABF measures on the same chart; disks predicted to break Max Stretch are cut before any
+//! solve (for methods that do not balance area), and the plan does not depend on the method.
+
+mod common;
+
+use common::{sphere, Soup};
+use uvflat_core::charts::build_charts;
+use uvflat_core::cuts::{cones::ScaleSolver, predicted_outside};
+use uvflat_core::mesh::PolyMesh;
+use uvflat_core::methods::{abf, slim};
+use uvflat_core::{unwrap, Method, UnwrapOptions};
+
+/// The spherical cap `z > 1 − depth` of the unit sphere (`depth` 1: a hemisphere).
+fn cap(depth: f64) -> Soup {
+    sphere(48, 48, |c| c[2] > 1.0 - depth)
+}
+
+/// The predicted share outside `[1/s, s]` of the one chart of `s`.
+fn predicted(s: &Soup, stretch: f64) -> f64 {
+    let mesh = PolyMesh::new(&s.positions, &s.corner_verts, &s.face_sizes).unwrap();
+    let charts = build_charts(&mesh, &[], None);
+    assert_eq!(charts.len(), 1);
+    let solver = ScaleSolver::new(&charts[0]).unwrap();
+    predicted_outside(&charts[0], &solver, stretch).unwrap()
+}
+
+/// The share outside `[1/s, s]` measured on the chart of `s` unwrapped by `method`, uncut.
+fn measured(s: &Soup, method: Method, stretch: f64) -> f64 {
+    let mut o = UnwrapOptions { method, ..Default::default() };
+    o.auto_seams.enabled = false;
+    o.auto_seams.max_stretch = stretch;
+    let r = unwrap(&s.input(), &o).unwrap();
+    assert_eq!(r.charts.len(), 1);
+    r.charts[0].density.outside
+}
+
+#[test]
+fn a_flat_disk_is_predicted_without_distortion() {
+    let s = common::planar_disk(8, 24);
+    assert_eq!(predicted(&s, 1.05), 0.0);
+}
+
+#[test]
+fn the_prediction_grows_with_the_cap_and_follows_abf() {
+    let mut last = -1.0;
+    let mut seen_nonzero = false;
+    for depth in [0.3, 0.6, 1.0, 1.4] {
+        let s = cap(depth);
+        let p = predicted(&s, 1.5);
+        let m = measured(&s, Method::Abf(abf::AbfOptions::default()), 1.5);
+        assert!(p >= last - 1e-12, "depth {depth}: predicted {p:.3} below the shallower cap's {last:.3}");
+        assert!((p - m).abs() <= 0.08, "depth {depth}: predicted {p:.3}, ABF measures {m:.3}");
+        seen_nonzero |= p > 0.05;
+        last = p;
+    }
+    assert!(seen_nonzero, "no cap was predicted to break the bound: the comparison proves little");
+}
+
+#[test]
+fn a_disk_predicted_to_break_the_rule_is_cut_before_any_solve() {
+    // A deep cap: far beyond Max Stretch 2 when flattened as it is.
+    let s = cap(1.6);
+    assert!(predicted(&s, 2.0) > uvflat_core::pipeline::triage::PREDICTED_BREAK);
+    let abf = unwrap(&s.input(), &UnwrapOptions { method: Method::Abf(abf::AbfOptions::default()), ..Default::default() }).unwrap();
+    assert_eq!(abf.phases.solve, 0.0, "ABF solved the cap as it is first");
+    assert!(!abf.new_seams.is_empty());
+    // SLIM balances area: it is solved as it is first.
+    let slim = unwrap(&s.input(), &UnwrapOptions { method: Method::Slim(slim::SlimOptions::default()), ..Default::default() }).unwrap();
+    assert!(slim.phases.solve > 0.0, "SLIM was not tried on the cap as it is");
+    // A shallow cap keeps the rule as it is and is solved without a cut.
+    let shallow = unwrap(&cap(0.3).input(), &UnwrapOptions { method: Method::Abf(abf::AbfOptions::default()), ..Default::default() }).unwrap();
+    assert!(shallow.new_seams.is_empty() && shallow.phases.solve > 0.0);
+}
+
+#[test]
+fn the_planned_seams_do_not_depend_on_the_method() {
+    // A closed sphere: every conformal method gets the predicted plan; where each keeps the
+    // rule on it, the seams are the same.
+    let s = common::cube_sphere(10);
+    let seams = |method: Method| {
+        let r = unwrap(&s.input(), &UnwrapOptions { method, ..Default::default() }).unwrap();
+        assert!(r.charts.iter().all(|c| c.status.name() == "solved"), "{:?}", r.charts.iter().map(|c| c.status.name()).collect::<Vec<_>>());
+        let mut e = r.new_seams.clone();
+        e.sort_unstable();
+        e
+    };
+    let abf = seams(Method::Abf(abf::AbfOptions::default()));
+    assert!(!abf.is_empty());
+    assert_eq!(abf, seams(Method::Lscm));
+    assert_eq!(abf, seams(Method::Spectral(Default::default())));
+}
