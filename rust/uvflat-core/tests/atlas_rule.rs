@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::{load, shared_meshes, soup_of, sphere, Soup};
+use common::{cube, load, shared_meshes, soup_of, sphere, Soup};
 use uvflat_core::charts::build_charts;
 use uvflat_core::mesh::PolyMesh;
 use uvflat_core::methods::{abf, mips, scaffold, slim};
@@ -37,41 +37,6 @@ fn two_parts() -> Soup {
     a.corner_verts.extend(b.corner_verts.iter().map(|v| v + off));
     a.face_sizes.extend(&b.face_sizes);
     a
-}
-
-/// A cube of 6 × n × n quads.
-fn cube(n: usize) -> Soup {
-    let mut positions: Vec<[f64; 3]> = Vec::new();
-    let mut index = std::collections::HashMap::new();
-    let mut id = |p: [i64; 3]| -> u32 {
-        *index.entry(p).or_insert_with(|| {
-            positions.push([p[0] as f64 / n as f64, p[1] as f64 / n as f64, p[2] as f64 / n as f64]);
-            (positions.len() - 1) as u32
-        })
-    };
-    let n_ = n as i64;
-    let mut faces = Vec::new();
-    for axis in 0..3 {
-        for side in [0, n_] {
-            for i in 0..n_ {
-                for j in 0..n_ {
-                    let at = |a: i64, b: i64| {
-                        let mut p = [0i64; 3];
-                        p[axis] = side;
-                        p[(axis + 1) % 3] = a;
-                        p[(axis + 2) % 3] = b;
-                        p
-                    };
-                    let mut f = vec![id(at(i, j)), id(at(i + 1, j)), id(at(i + 1, j + 1)), id(at(i, j + 1))];
-                    if side == 0 {
-                        f.reverse();
-                    }
-                    faces.push(f);
-                }
-            }
-        }
-    }
-    soup_of(positions, faces, |_| true)
 }
 
 /// The generated meshes: (name, soup).

@@ -51,6 +51,10 @@ struct Residual {
 const NONE: u32 = u32::MAX;
 /// A node's parent arc leads straight to its terminal.
 const TERMINAL: u32 = u32::MAX - 1;
+/// Search tree of a node: none, the source's, the sink's.
+const FREE: u8 = 0;
+const SRC: u8 = 1;
+const SNK: u8 = 2;
 
 impl Residual {
     fn new(n: usize, edges: &[(u32, u32, f64)], s: u32, t: u32) -> Option<Residual> {
@@ -96,15 +100,27 @@ impl Residual {
         self.to[(arc ^ 1) as usize] as usize
     }
 
+    /// The parent a node of tree `side` reaches through its parent arc `arc`.
+    fn up(&self, arc: u32, side: u8) -> usize {
+        if side == SRC { self.from(arc) } else { self.to[arc as usize] as usize }
+    }
+
+    /// The neighbours `q` of `p` in tree `side`, each with the arc that would make it `p`'s
+    /// parent (`q → p` in the source tree, `p → q` in the sink tree) and the arc that makes
+    /// `p` its parent.
+    fn same_tree<'t>(&'t self, p: usize, side: u8, tree: &'t [u8]) -> impl Iterator<Item = (usize, u32, u32)> + 't {
+        self.arcs[self.start[p]..self.start[p + 1]].iter().filter_map(move |&a| {
+            let q = self.to[a as usize] as usize;
+            (tree[q] == side).then(|| if side == SRC { (q, a ^ 1, a) } else { (q, a, a ^ 1) })
+        })
+    }
+
     /// Boykov & Kolmogorov 2004: two search trees grown from `s` and `t` over arcs with
     /// capacity left, an augmenting path wherever they touch, and orphaned subtrees adopted
     /// by a node of the same tree still rooted at its terminal (checked with the distance and
     /// time marks of the paper) instead of a fresh search per phase. Deterministic: nodes are
     /// taken first in, first out, arcs in edge order.
     fn max_flow(mut self) -> Option<MinCut> {
-        const FREE: u8 = 0;
-        const SRC: u8 = 1;
-        const SNK: u8 = 2;
         let n = self.n;
         let mut tree = vec![FREE; n];
         // Arc from the parent to the node (source tree) or from the node to the parent (sink
@@ -206,14 +222,7 @@ impl Residual {
             while let Some(p) = orphans.pop_front() {
                 let side = tree[p];
                 let mut best: Option<(u32, u32)> = None; // (arc, distance)
-                for k in self.start[p]..self.start[p + 1] {
-                    let a = self.arcs[k];
-                    let q = self.to[a as usize] as usize;
-                    if tree[q] != side {
-                        continue;
-                    }
-                    // Arc from q to p (source tree) or from p to q (sink tree).
-                    let link = if side == SRC { a ^ 1 } else { a };
+                for (q, link, _) in self.same_tree(p, side, &tree) {
                     if self.cap[link as usize] <= self.eps {
                         continue;
                     }
@@ -234,7 +243,7 @@ impl Residual {
                             NONE => break false,
                             arc => {
                                 d += 1;
-                                x = if side == SRC { self.from(arc) } else { self.to[arc as usize] as usize };
+                                x = self.up(arc, side);
                             }
                         }
                     };
@@ -248,8 +257,7 @@ impl Residual {
                         stamp[x] = time;
                         dist[x] = dd;
                         dd = dd.saturating_sub(1);
-                        let arc = parent[x];
-                        x = if side == SRC { self.from(arc) } else { self.to[arc as usize] as usize };
+                        x = self.up(parent[x], side);
                     }
                     if best.is_none_or(|b| d < b.1) {
                         best = Some((link, d));
@@ -263,18 +271,11 @@ impl Residual {
                 }
                 // No parent: p leaves its tree; its neighbours in the tree become active, its
                 // children orphans.
-                for k in self.start[p]..self.start[p + 1] {
-                    let a = self.arcs[k];
-                    let q = self.to[a as usize] as usize;
-                    if tree[q] != side {
-                        continue;
-                    }
-                    let link = if side == SRC { a ^ 1 } else { a };
+                for (q, link, child_arc) in self.same_tree(p, side, &tree) {
                     if self.cap[link as usize] > self.eps && !is_active[q] {
                         active.push_back(q);
                         is_active[q] = true;
                     }
-                    let child_arc = if side == SRC { a } else { a ^ 1 };
                     if parent[q] == child_arc {
                         parent[q] = NONE;
                         orphans.push_back(q);

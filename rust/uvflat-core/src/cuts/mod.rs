@@ -283,6 +283,18 @@ impl<'a> ChartCutter<'a> {
         avoid: &[bool],
         cache: Option<&visibility::VisibilityCache>,
     ) -> Self {
+        Self::with_solver(mesh, chart, options, avoid, cache, cones::ScaleSolver::new(chart))
+    }
+
+    /// [`Self::with_cache`] with the chart's scale system built already (`None`: it failed).
+    pub fn with_solver(
+        mesh: &PolyMesh<'_>,
+        chart: &'a Chart,
+        options: &'a AutoSeamOptions,
+        avoid: &[bool],
+        cache: Option<&visibility::VisibilityCache>,
+        solver: Option<cones::ScaleSolver>,
+    ) -> Self {
         let graph = ChartGraph::new(mesh, chart);
         let mut cost = edge_costs_cached(mesh, &graph, chart, options, avoid, cache);
         let boundary = chart.boundary_mask();
@@ -308,7 +320,7 @@ impl<'a> ChartCutter<'a> {
             (true, _) => 1,
             (false, _) => 0,
         };
-        ChartCutter { chart, options, graph, cost, allowed, boundary, min_cones, solver: cones::ScaleSolver::new(chart), mirror, loops: Default::default() }
+        ChartCutter { chart, options, graph, cost, allowed, boundary, min_cones, solver, mirror, loops: Default::default() }
     }
 
     /// The chart's mirror, when [`AutoSeamOptions::symmetry`] asked for one and found it.
@@ -331,19 +343,9 @@ impl<'a> ChartCutter<'a> {
         &self.allowed
     }
 
-    /// The predicted share of the chart's 3D area outside `[1/s, s]` of its own density when
-    /// it is flattened conformally as it is, without cuts (`s` = Max Stretch): triangle `t`
-    /// gets the area ratio `exp(2 ū_t)` (`ū_t` the mean over its corners of
-    /// [`cones::ScaleSolver::base_u`]), relative to the chart's area-weighted mean. A lower
-    /// bound, roughly, for a free-boundary conformal map (LSCM, ABF), whose outline is not
-    /// held to its 3D lengths. `None` on a chart without a boundary or when the system failed.
-    pub fn predicted_outside(&self) -> Option<f64> {
-        predicted_outside(self.chart, self.solver.as_ref()?, self.options.max_stretch)
-    }
-
     /// `(predicted density ratio, 3D area)` per triangle of the chart (in `chart.triangles`
     /// order) once cut along `cut`, when the cut leaves it in one piece: the flattening of
-    /// [`Self::predicted_outside`] for that piece. The piece's interior equations are the
+    /// [`predicted_outside`] for that piece. The piece's interior equations are the
     /// chart's (cutting changes no angle), and `u = 0` on both sides of a cut edge is `u = 0`
     /// at its vertices, so the chart's own system with the cut's vertices held gives it: one
     /// numeric factorization on the chart's analysis, no new chart, ordering or assembly.
@@ -474,14 +476,19 @@ fn mirrored(cones: &[u32], mirror: &symmetry::Mirror) -> Vec<u32> {
     out
 }
 
-/// [`ChartCutter::predicted_outside`] of `chart` with its scale system `solver`, against
-/// `[1/s, s]`.
+/// The predicted share of `chart`'s 3D area outside `[1/s, s]` of its own density when it is
+/// flattened conformally as it is, without cuts, with its outline's lengths kept (`s` = Max
+/// Stretch; `solver`: the chart's scale system): triangle `t` gets the area ratio `exp(2 ū_t)`
+/// (`ū_t` the mean over its corners of [`cones::ScaleSolver::base_u`]), relative to the
+/// chart's area-weighted mean. A lower bound, roughly, for a free-boundary conformal map (LSCM,
+/// ABF), whose outline is not held to its 3D lengths. `None` on a chart without a boundary or
+/// when the system failed.
 pub fn predicted_outside(chart: &Chart, solver: &cones::ScaleSolver, s: f64) -> Option<f64> {
     Some(crate::metrics::density::spread_of(predicted_ratios(chart, solver)?, s).outside)
 }
 
 /// `(predicted density ratio, 3D area)` per triangle of `chart` flattened conformally with its
-/// outline's lengths kept ([`ChartCutter::predicted_outside`]), the ratios relative to the
+/// outline's lengths kept ([`predicted_outside`]), the ratios relative to the
 /// chart's area-weighted mean. `None` on a chart without a boundary or when the system failed.
 pub fn predicted_ratios(chart: &Chart, solver: &cones::ScaleSolver) -> Option<Vec<(f64, f64)>> {
     if chart.boundary_loops.is_empty() {

@@ -11,7 +11,7 @@
 //!    rule; pinned disks and charts with a defect are never cut. With automatic seams off
 //!    every chart is solved as it is.
 //!    A disk solved by a method that does not balance area is cut first when its predicted
-//!    flattening ([`crate::cuts::ChartCutter::predicted_outside`]) breaks Max Stretch by far.
+//!    flattening ([`crate::cuts::predicted_outside`]) breaks Max Stretch by far.
 //! 2. Plan cuts: [`crate::cuts::ChartCutter`] (cones on the conformal scale factor, handle
 //!    loops, holes and cones joined to the outline by a Steiner tree of low-cost edges), and
 //!    [`predict::plan`]: more cones while the predicted flattening of a piece breaks Max
@@ -130,18 +130,21 @@ fn road(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], depth: us
     if road == Triage::Cut {
         return repair::repair(ctx, chart, base_seams, depth, None, None);
     }
-    let mut cutter = None;
+    // The scale system of the prediction, kept for the cutter if the disk is cut.
+    let mut solver = None;
     if road == Triage::SolveThenRepair && !ctx.options.method.balances_area() {
         // A disk whose conformal flattening is predicted to break Max Stretch by far is cut
-        // before any solve (the solve as it is would be thrown away).
+        // before any solve (the solve as it is would be thrown away). Only the scale system
+        // is built here: the cutter's graph, costs and occlusion rays wait until a cut is due.
         let t = std::time::Instant::now();
-        let c = repair::cutter(ctx, chart);
-        let predicted = c.predicted_outside();
+        let s = crate::cuts::cones::ScaleSolver::new(chart);
+        let predicted = s.as_ref().and_then(|s| crate::cuts::predicted_outside(chart, s, ctx.rule.max_stretch));
         ctx.clock.add(|p| p.plan_cuts += t.elapsed().as_secs_f64());
         if predicted.is_some_and(|o| o > triage::PREDICTED_BREAK) {
-            return repair::repair(ctx, chart, base_seams, depth, None, Some(c));
+            let cutter = repair::cutter_with(ctx, chart, s);
+            return repair::repair(ctx, chart, base_seams, depth, None, Some(cutter));
         }
-        cutter = Some(c);
+        solver = Some(s);
     }
     let t = std::time::Instant::now();
     let (report, uv, face_flips) = solve::solve_chart(chart, ctx.pins, ctx.options, &ctx.rule);
@@ -149,6 +152,7 @@ fn road(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], depth: us
     let broken = !report.status.mapped() || ctx.rule.broken(&report).is_some();
     let first = Piece { chart: None, report, uv, face_flips, seams: Vec::new(), area: chart_area(chart) };
     if road == Triage::SolveThenRepair && broken {
+        let cutter = solver.map(|s| repair::cutter_with(ctx, chart, s));
         repair::repair(ctx, chart, base_seams, depth, Some(first), cutter)
     } else {
         vec![first]

@@ -27,13 +27,18 @@
 use super::solve::solve_chart;
 use super::{Context, Piece};
 use crate::charts::{build_charts_with, Chart};
-use crate::cuts::{self, ChartCutter};
+use crate::cuts::{self, cones::ScaleSolver, ChartCutter};
 use crate::mesh::PolyMesh;
 
 /// The cutting state of `chart` for [`repair`]: graph, costs and the scale system's analysis,
 /// made once (each round refactors numerically).
 pub fn cutter<'a>(ctx: &'a Context<'_, '_>, chart: &'a Chart) -> ChartCutter<'a> {
     ChartCutter::with_cache(ctx.mesh, chart, &ctx.options.auto_seams, ctx.avoid, Some(&ctx.visibility))
+}
+
+/// [`cutter`] with the chart's scale system built already.
+pub fn cutter_with<'a>(ctx: &'a Context<'_, '_>, chart: &'a Chart, solver: Option<ScaleSolver>) -> ChartCutter<'a> {
+    ChartCutter::with_solver(ctx.mesh, chart, &ctx.options.auto_seams, ctx.avoid, Some(&ctx.visibility), solver)
 }
 
 /// Repair `chart` (already cut along `base_seams`). `first`: the chart solved as it is, if it
@@ -236,10 +241,10 @@ fn clearly_better(ctx: &Context<'_, '_>, a: &[Piece], b: &[Piece]) -> bool {
 
 /// A repair round must leave at most this share of the best attempt's area beyond the
 /// density bound to earn another round.
-pub(crate) const PROGRESS: f64 = 0.9;
+pub const PROGRESS: f64 = 0.9;
 
 /// Most cones one repair round adds.
-pub(crate) const CONES_PER_ROUND: usize = 4;
+pub const CONES_PER_ROUND: usize = 4;
 
 /// Cones for the next round: one in each of the largest crushed regions of `piece` (up to
 /// [`CONES_PER_ROUND`]). A region is a vertex-connected set of triangles whose density ratio

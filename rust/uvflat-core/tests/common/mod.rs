@@ -323,9 +323,8 @@ pub fn brick_hexagons(n: usize, seed: u64) -> Soup {
     Soup { positions, corner_verts, face_sizes }
 }
 
-/// Unit sphere from a subdivided cube: `n × n` quads a side projected on the sphere (exactly
-/// mirror-symmetric in the three coordinate planes when `n` is even).
-pub fn cube_sphere(n: usize) -> Soup {
+/// The unit cube `[0, 1]³` of `6 × n × n` quads, wound outwards.
+pub fn cube(n: usize) -> Soup {
     let mut positions: Vec<[f64; 3]> = Vec::new();
     let mut index = std::collections::HashMap::new();
     let mut cv = Vec::new();
@@ -348,9 +347,7 @@ pub fn cube_sphere(n: usize) -> Soup {
                     }
                     for p in q {
                         let v = *index.entry(p).or_insert_with(|| {
-                            let x = [p[0] as f64 / ni as f64 * 2.0 - 1.0, p[1] as f64 / ni as f64 * 2.0 - 1.0, p[2] as f64 / ni as f64 * 2.0 - 1.0];
-                            let l = (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).sqrt();
-                            positions.push([x[0] / l, x[1] / l, x[2] / l]);
+                            positions.push([p[0] as f64 / ni as f64, p[1] as f64 / ni as f64, p[2] as f64 / ni as f64]);
                             (positions.len() - 1) as u32
                         });
                         cv.push(v);
@@ -361,6 +358,18 @@ pub fn cube_sphere(n: usize) -> Soup {
         }
     }
     Soup { positions, corner_verts: cv, face_sizes: fs }
+}
+
+/// Unit sphere from a subdivided cube: `n × n` quads a side projected on the sphere (exactly
+/// mirror-symmetric in the three coordinate planes when `n` is even).
+pub fn cube_sphere(n: usize) -> Soup {
+    let mut s = cube(n);
+    for p in &mut s.positions {
+        let x = [p[0] * 2.0 - 1.0, p[1] * 2.0 - 1.0, p[2] * 2.0 - 1.0];
+        let l = (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).sqrt();
+        *p = [x[0] / l, x[1] / l, x[2] / l];
+    }
+    s
 }
 
 /// A latitude–longitude sphere of radius 1: `nu` segments, `nv` rings (quads, triangle fans
