@@ -147,6 +147,41 @@ impl Chart {
         self.vertex_order.0.get_or_init(|| crate::solvers::ordering::vertex_order(self.positions.len(), &self.triangles))
     }
 
+    /// Take [`Chart::vertex_order`] from `parent`, a chart this one is a piece of (they share
+    /// corners: a piece cut from it, or a half of a split), when the parent's is known and this
+    /// chart is large (at least [`crate::solvers::ordering::ND_MIN_SIZE`] vertices, where an
+    /// ordering costs about a second): the parent's order restricted to the piece, a vertex
+    /// that the cut split in two taking its original's place (both copies together). Does
+    /// nothing when the order of this chart is known already.
+    pub fn inherit_vertex_order(&self, parent: &Chart) {
+        let Some(order) = parent.vertex_order.0.get() else { return };
+        let n = self.positions.len();
+        let large = crate::solvers::ordering::OrderingKind::Auto.resolve(n) == crate::solvers::ordering::OrderingKind::NestedDissection;
+        if self.vertex_order.0.get().is_some() || !large || order.len() != parent.positions.len() {
+            return;
+        }
+        let mut rank = vec![u32::MAX; parent.positions.len()];
+        for (r, &v) in order.iter().enumerate() {
+            rank[v as usize] = r as u32;
+        }
+        let corners = parent.corner_vertex.iter().map(|&(c, _)| c as usize + 1).max().unwrap_or(0);
+        let mut corner_rank = vec![u32::MAX; corners];
+        for &(c, v) in &parent.corner_vertex {
+            corner_rank[c as usize] = rank[v as usize];
+        }
+        drop(rank);
+        // A vertex no corner of the parent reaches (none, for a piece) goes last.
+        let mut key = vec![u32::MAX; n];
+        for &(c, v) in &self.corner_vertex {
+            if let Some(&r) = corner_rank.get(c as usize) {
+                key[v as usize] = key[v as usize].min(r);
+            }
+        }
+        let mut own: Vec<u32> = (0..n as u32).collect();
+        own.sort_unstable_by_key(|&v| (key[v as usize], v));
+        let _ = self.vertex_order.0.set(own);
+    }
+
     /// The ordering for a sparse system over the chart's vertices that would compute one of
     /// `kind`: [`Chart::vertex_order`], shared, except on charts so small that their systems
     /// are factored dense (no ordering at all) and on charts with quads, whose systems differ

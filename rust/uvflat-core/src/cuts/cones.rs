@@ -16,12 +16,15 @@
 //! is `K̂_c = K_c + (L u)_c`; the cone curvatures (with the boundary's) add up to 2πχ.
 //!
 //! Linear algebra: the Dirichlet vertices are held by a large diagonal penalty so the sparsity
-//! pattern never changes: one symbolic Cholesky analysis and one numeric factorization per
-//! chart, with the boundary held (and, on a closed chart, a ground vertex: the vertex of
-//! largest curvature). Cones are held on top of that factor by the capacitance method: with
-//! `g_c = L₀⁻¹ e_c` (one pair of triangular solves per cone, remembered), the scale factor
-//! with cones `C` is `u = u₀ + Σ_c λ_c g_c` where `G_CC λ = −u₀|_C` (a small dense system), so
-//! trying a cone costs two triangular solves, not a factorization. A closed chart whose cone
+//! pattern never changes: one symbolic Cholesky analysis per chart, in the chart's shared
+//! vertex order ([`Chart::vertex_order`], which the method's systems on the chart's large
+//! pieces inherit, [`Chart::inherit_vertex_order`]), and one numeric factorization with the
+//! boundary held (and, on a closed chart, a ground vertex: the vertex of largest curvature).
+//! Cones are held on top of that factor by the capacitance method: with `g_c = L₀⁻¹ e_c` (one
+//! pair of triangular solves per cone, remembered), the scale factor with cones `C` is
+//! `u = u₀ + Σ_c λ_c g_c` where `G_CC λ = −u₀|_C` (a small dense system), so trying a cone
+//! costs two triangular solves, not a factorization. A closed chart's one cone is not moved
+//! (without it the system is singular). A closed chart whose cone
 //! set leaves out the ground vertex gets a second base factor grounded at the set's first cone
 //! (kept: later rounds keep their first cone), and the capacitance method on it.
 //!
@@ -34,10 +37,10 @@
 
 use std::f64::consts::PI;
 
-use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, LltRef, SymbolicCholesky, SymmetricOrdering};
 use faer::sparse::{Pair, SparseColMat, SymbolicSparseColMat};
-use faer::{Mat, Side};
+use faer::{MatMut, Side};
 
 use crate::charts::Chart;
 use crate::geometry::clamped_angles;
@@ -66,7 +69,7 @@ pub struct ScaleSolver {
     entries: Vec<(u32, u32, f64)>,
     symbolic: SymbolicSparseColMat<usize>,
     argsort: faer::sparse::Argsort<usize>,
-    llt: SymbolicLlt<usize>,
+    llt: SymbolicCholesky<usize>,
     penalty: f64,
     /// Angle defect per vertex.
     pub defect: Vec<f64>,
@@ -82,7 +85,7 @@ pub struct ScaleSolver {
 /// [`ScaleSolver`]'s factor with the boundary and ground held, its solution and the cones'
 /// columns of its inverse.
 struct BaseFactor {
-    llt: Llt<usize, f64>,
+    llt: Factor,
     /// On a closed chart, the vertex held to make the system definite.
     ground: Option<u32>,
     /// `u` with only the boundary and ground held.
@@ -129,7 +132,17 @@ impl ScaleSolver {
         let eps = 1e-8 * mean_diag.max(1e-300);
         let pairs: Vec<Pair<usize, usize>> = entries.iter().map(|e| Pair { row: e.0 as usize, col: e.1 as usize }).collect();
         let (symbolic, argsort) = SymbolicSparseColMat::try_new_from_indices(n, n, &pairs).ok()?;
-        let llt = SymbolicLlt::try_new(symbolic.as_ref(), Side::Lower).ok()?;
+        // The chart's shared vertex order (AMD of its vertex graph, the graph of `L`).
+        let fwd: Vec<usize> = chart.vertex_order().iter().map(|&v| v as usize).collect();
+        if fwd.len() != n {
+            return None;
+        }
+        let mut inv = vec![0usize; n];
+        for (new, &old) in fwd.iter().enumerate() {
+            inv[old] = new;
+        }
+        let perm = faer::perm::PermRef::new_checked(&fwd, &inv, n);
+        let llt = factorize_symbolic_cholesky(symbolic.as_ref(), Side::Lower, SymmetricOrdering::Custom(perm), Default::default()).ok()?;
         let mut diag = vec![0usize; n];
         let mut base = Vec::with_capacity(entries.len());
         for (k, e) in entries.iter().enumerate() {
@@ -238,10 +251,10 @@ impl ScaleSolver {
         if let Some(g) = base.green.lock().unwrap_or_else(|e| e.into_inner()).get(&c) {
             return g.clone();
         }
-        let mut rhs = Mat::<f64>::zeros(self.n, 1);
-        rhs[(c as usize, 0)] = 1.0;
-        base.llt.solve_in_place(rhs.as_mut());
-        let col = std::sync::Arc::new((0..self.n).map(|i| rhs[(i, 0)]).collect::<Vec<f64>>());
+        let mut rhs = vec![0.0; self.n];
+        rhs[c as usize] = 1.0;
+        base.llt.solve_in_place(&self.llt, &mut rhs);
+        let col = std::sync::Arc::new(rhs);
         base.green.lock().unwrap_or_else(|e| e.into_inner()).insert(c, col.clone());
         col
     }
@@ -253,7 +266,7 @@ impl ScaleSolver {
     }
 
     /// Factor `L` with `fixed` and the boundary held, and solve for `u`.
-    fn factor_and_solve(&self, fixed: &[u32]) -> Option<(Llt<usize, f64>, Vec<f64>)> {
+    fn factor_and_solve(&self, fixed: &[u32]) -> Option<(Factor, Vec<f64>)> {
         let mut values = self.base.clone();
         let mut held = self.boundary.clone();
         for &c in fixed {
@@ -265,10 +278,14 @@ impl ScaleSolver {
             }
         }
         let mat = SparseColMat::new_from_argsort(self.symbolic.clone(), &self.argsort, &values).ok()?;
-        let f = Llt::try_new_with_symbolic(self.llt.clone(), mat.as_ref(), Side::Lower).ok()?;
-        let mut rhs = Mat::<f64>::from_fn(self.n, 1, |i, _| if held[i] { 0.0 } else { -self.defect[i] });
-        f.solve_in_place(rhs.as_mut());
-        let u: Vec<f64> = (0..self.n).map(|i| if held[i] { 0.0 } else { rhs[(i, 0)] }).collect();
+        let f = Factor::new(&self.llt, &mat)?;
+        let mut u: Vec<f64> = (0..self.n).map(|i| if held[i] { 0.0 } else { -self.defect[i] }).collect();
+        f.solve_in_place(&self.llt, &mut u);
+        for (x, &h) in u.iter_mut().zip(&held) {
+            if h {
+                *x = 0.0;
+            }
+        }
         u.iter().all(|x| x.is_finite()).then_some((f, u))
     }
 
@@ -285,6 +302,35 @@ impl ScaleSolver {
             }
         }
         self.defect[v as usize] + lu
+    }
+}
+
+/// A numeric Cholesky factor on [`ScaleSolver`]'s analysis.
+struct Factor {
+    values: Vec<f64>,
+}
+
+impl Factor {
+    /// Factor `mat` (lower triangle, the analysed pattern); `None` when it is not positive
+    /// definite or memory runs out.
+    fn new(symbolic: &SymbolicCholesky<usize>, mat: &SparseColMat<usize, f64>) -> Option<Factor> {
+        let par = faer::get_global_parallelism();
+        let mut values = Vec::new();
+        values.try_reserve_exact(symbolic.len_val()).ok()?;
+        values.resize(symbolic.len_val(), 0.0);
+        let mut mem = MemBuffer::try_new(symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default())).ok()?;
+        symbolic
+            .factorize_numeric_llt(&mut values, mat.as_ref(), Side::Lower, Default::default(), par, MemStack::new(&mut mem), Default::default())
+            .ok()?;
+        Some(Factor { values })
+    }
+
+    /// `x ← A⁻¹ x`.
+    fn solve_in_place(&self, symbolic: &SymbolicCholesky<usize>, x: &mut [f64]) {
+        let par = faer::get_global_parallelism();
+        let n = x.len();
+        let mut mem = MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(1, par));
+        LltRef::new(symbolic, &self.values).solve_in_place_with_conj(faer::Conj::No, MatMut::from_column_major_slice_mut(x, n, 1), par, MemStack::new(&mut mem));
     }
 }
 
@@ -359,6 +405,11 @@ pub fn place_cones(
     for _pass in 0..1 {
         let mut moved = false;
         for i in seed.len()..cones.len() {
+            if !has_boundary && cones.len() == 1 {
+                // A closed chart with no cone has no scale factor (its system is singular):
+                // its one cone stays where the curvature peaks.
+                continue;
+            }
             let mut trial = cones.clone();
             trial.remove(i);
             let Some(without) = solver.solve(&trial) else { continue };

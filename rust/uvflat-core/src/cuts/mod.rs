@@ -283,7 +283,22 @@ impl<'a> ChartCutter<'a> {
         avoid: &[bool],
         cache: Option<&visibility::VisibilityCache>,
     ) -> Self {
-        Self::with_solver(mesh, chart, options, avoid, cache, cones::ScaleSolver::new(chart))
+        // The scale system's analysis and the graph's costs (occlusion rays) are independent.
+        let (solver, (graph, cost)) = rayon::join(|| cones::ScaleSolver::new(chart), || Self::graph_and_costs(mesh, chart, options, avoid, cache));
+        Self::assemble(chart, options, avoid, graph, cost, solver)
+    }
+
+    /// The edge graph of `chart` and its cut costs ([`edge_costs_cached`]).
+    fn graph_and_costs(
+        mesh: &PolyMesh<'_>,
+        chart: &Chart,
+        options: &AutoSeamOptions,
+        avoid: &[bool],
+        cache: Option<&visibility::VisibilityCache>,
+    ) -> (ChartGraph, Vec<f64>) {
+        let graph = ChartGraph::new(mesh, chart);
+        let cost = edge_costs_cached(mesh, &graph, chart, options, avoid, cache);
+        (graph, cost)
     }
 
     /// [`Self::with_cache`] with the chart's scale system built already (`None`: it failed).
@@ -295,8 +310,19 @@ impl<'a> ChartCutter<'a> {
         cache: Option<&visibility::VisibilityCache>,
         solver: Option<cones::ScaleSolver>,
     ) -> Self {
-        let graph = ChartGraph::new(mesh, chart);
-        let mut cost = edge_costs_cached(mesh, &graph, chart, options, avoid, cache);
+        let (graph, cost) = Self::graph_and_costs(mesh, chart, options, avoid, cache);
+        Self::assemble(chart, options, avoid, graph, cost, solver)
+    }
+
+    /// The cutter of `chart` from its graph, costs and scale system.
+    fn assemble(
+        chart: &'a Chart,
+        options: &'a AutoSeamOptions,
+        avoid: &[bool],
+        graph: ChartGraph,
+        mut cost: Vec<f64>,
+        solver: Option<cones::ScaleSolver>,
+    ) -> Self {
         let boundary = chart.boundary_mask();
         let mut allowed: Vec<bool> =
             (0..chart.positions.len()).map(|v| !boundary[v] && !avoid[chart.mesh_vertex[v] as usize]).collect();
@@ -360,6 +386,39 @@ impl<'a> ChartCutter<'a> {
         }
         let u = solver.solve_refactored(&fixed)?;
         ratios_of(self.chart, &u)
+    }
+
+    /// How many pieces the chart falls into when cut along `cut` (its polygons joined across
+    /// the edges `cut` leaves whole): what [`crate::charts::build_charts_with`] would make of
+    /// it, without building them.
+    pub fn pieces_after(&self, cut: &ChartCuts) -> usize {
+        let graph = &self.graph;
+        let mut is_cut = vec![false; graph.edges.len()];
+        for e in &cut.edges {
+            if let Ok(id) = graph.edges.binary_search(e) {
+                is_cut[id] = true;
+            }
+        }
+        let mut parent: Vec<u32> = (0..graph.polygons.len() as u32).collect();
+        fn find(parent: &mut [u32], mut x: u32) -> u32 {
+            while parent[x as usize] != x {
+                parent[x as usize] = parent[parent[x as usize] as usize];
+                x = parent[x as usize];
+            }
+            x
+        }
+        let mut pieces = graph.polygons.len();
+        for (e, p) in graph.edge_polygons.iter().enumerate() {
+            if is_cut[e] || p[1] == u32::MAX {
+                continue;
+            }
+            let (a, b) = (find(&mut parent, p[0]), find(&mut parent, p[1]));
+            if a != b {
+                parent[a.max(b) as usize] = a.min(b);
+                pieces -= 1;
+            }
+        }
+        pieces
     }
 
     /// Cones and cut for this round (arguments as in [`cut_chart`]).

@@ -97,6 +97,9 @@ pub fn repair<'a>(
         let mut all: Vec<[u32; 2]> = base_seams.to_vec();
         all.extend_from_slice(&cut.seams);
         let sub = build_charts_with(ctx.mesh, &all, Some(&mask), ctx.render);
+        for c in &sub {
+            c.inherit_vertex_order(chart);
+        }
         ctx.clock.add(|p| p.plan_cuts += t.elapsed().as_secs_f64());
         let t = std::time::Instant::now();
         let n_pieces = sub.len();
@@ -171,6 +174,9 @@ pub fn repair<'a>(
             let mut all: Vec<[u32; 2]> = base_seams.to_vec();
             all.extend_from_slice(&split);
             let halves = build_charts_with(ctx.mesh, &all, Some(&mask), ctx.render);
+            for h in &halves {
+                h.inherit_vertex_order(chart);
+            }
             // Each half takes the pipeline's road again (cut, or solve then repair), the halves
             // in parallel; results in half order, so the outcome does not depend on threads.
             // The unwrap's progress goes with them, so a cancel reaches their solves.
