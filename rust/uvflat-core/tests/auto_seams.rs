@@ -339,3 +339,38 @@ fn meshes_with_holes_are_joined_to_their_outline() {
         assert!(r.charts.iter().any(|c| c.kind == ChartKind::DiskWithHoles), "{f}");
     }
 }
+
+/// Cones are the tips of slits, and a tip at a saddle vertex (angle sum of 2π or more) opens
+/// to more than 2π in the flattening, so the slit's sides overlap there: no cone is ever
+/// placed where the angle defect is not positive, however many the cutter is asked for (the torus's inner half is all saddles; 3holes' handles are ringed by them).
+#[test]
+fn cones_are_never_placed_at_saddle_vertices() {
+    let mut soups = vec![("torus", torus(48, 24, 2.0, 0.7))];
+    if let Some(dir) = shared_meshes() {
+        soups.push(("3holes", load(&dir.join("3holes.off"))));
+    } else {
+        eprintln!("skipping 3holes: the shared meshes folder is absent");
+    }
+    for (name, s) in soups {
+        let mesh = PolyMesh::new(&s.positions, &s.corner_verts, &s.face_sizes).unwrap();
+        let chart = &build_charts(&mesh, &[], None)[0];
+        let solver = cuts::cones::ScaleSolver::new(chart).unwrap();
+        let saddles = (0..chart.positions.len()).filter(|&v| solver.defect[v] <= 0.0).count();
+        assert!(saddles > chart.positions.len() / 4, "{name}: {saddles} saddle vertices");
+        let options = AutoSeamOptions::default();
+        let avoid = vec![false; s.positions.len()];
+        let cutter = cuts::ChartCutter::new(&mesh, chart, &options, &avoid);
+        for v in 0..chart.positions.len() {
+            if solver.defect[v] <= 0.0 {
+                assert!(!cutter.allowed()[v], "{name}: saddle vertex {v} allowed as a cone");
+            }
+        }
+        for extra in [0, 8, 24] {
+            let cut = cutter.cut(&[], extra);
+            assert!(!cut.cones.is_empty(), "{name}: a closed chart gets a cone");
+            for &c in &cut.cones {
+                assert!(solver.defect[c as usize] > 0.0, "{name}: cone {c} at defect {}", solver.defect[c as usize]);
+            }
+        }
+    }
+}

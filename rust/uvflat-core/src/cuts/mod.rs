@@ -324,8 +324,14 @@ impl<'a> ChartCutter<'a> {
         solver: Option<cones::ScaleSolver>,
     ) -> Self {
         let boundary = chart.boundary_mask();
+        // A cone is the tip of a slit, and its angle in the flattening is about its angle sum
+        // on the surface (ABF's were 2–25° smaller on the bunny's cones): at a saddle vertex
+        // (angle sum of 2π or more) the slit's two sides overlap at the tip. Cones go where
+        // the surface is convex: a positive angle defect (a threshold would depend on the
+        // mesh's resolution, as defects shrink with the vertex's area).
+        let convex = |v: usize| solver.as_ref().is_none_or(|s| s.defect[v] > 0.0);
         let mut allowed: Vec<bool> =
-            (0..chart.positions.len()).map(|v| !boundary[v] && !avoid[chart.mesh_vertex[v] as usize]).collect();
+            (0..chart.positions.len()).map(|v| !boundary[v] && !avoid[chart.mesh_vertex[v] as usize] && convex(v)).collect();
         let mirror = symmetry::detect(&graph, &chart.positions, options.symmetry);
         if let Some(m) = &mirror {
             // The mean of an edge's cost and its mirror's; forbidden if either is.
@@ -364,7 +370,8 @@ impl<'a> ChartCutter<'a> {
         &self.cost
     }
 
-    /// Per chart vertex: whether it may become a cone (inside the chart, not avoided).
+    /// Per chart vertex: whether it may become a cone (inside the chart, not avoided, a
+    /// positive angle defect: not a saddle).
     pub fn allowed(&self) -> &[bool] {
         &self.allowed
     }
