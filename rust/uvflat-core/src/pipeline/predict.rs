@@ -85,12 +85,16 @@ pub fn plan(
             break;
         }
         let cut = cutter.cut(&seeds, round);
-        let mut all: Vec<[u32; 2]> = base_seams.to_vec();
-        all.extend_from_slice(&cut.seams);
         // One piece (the usual cut) is predicted on the chart's own system with the cut held,
         // without building it; several: each piece's own system.
         let whole = cutter.pieces_after(&cut) == 1;
-        let pieces = if whole { Vec::new() } else { build_charts_with(ctx.mesh, &all, Some(mask), ctx.render) };
+        let pieces = if whole {
+            Vec::new()
+        } else {
+            let mut all: Vec<[u32; 2]> = base_seams.to_vec();
+            all.extend_from_slice(&cut.seams);
+            build_charts_with(ctx.mesh, &all, Some(mask), ctx.render)
+        };
         // Predicted excess area of every piece beyond the allowed share, and the crushed
         // regions of the worst one.
         let mut excess = 0.0;

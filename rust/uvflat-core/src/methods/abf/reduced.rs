@@ -199,13 +199,8 @@ impl Reduced {
 
 /// A fill-reducing ordering of the reduced matrix: approximate minimum degree (nested
 /// dissection for large charts) on the graph of the constrained vertices (half the size of
-/// the matrix), each vertex's rows kept together. Taken from the chart's shared vertex order
-/// (an AMD order of the chart's vertex graph, [`crate::charts::Chart::vertex_order`])
-/// restricted to these vertices when the problem has one ([`Problem::vertex_order`]), at
-/// every size: on a 288k-vertex piece of the fertility split 1→4 three times, the shared AMD
-/// order, inherited from the chart the piece was cut from, gave a faster ABF++ solve than a
-/// nested dissection of the piece or of the chart (6.7–6.9 s against 7.7–9.0 s, two threads)
-/// and costs nothing to compute.
+/// the matrix), each vertex's rows kept together. The AMD order is the chart's shared vertex
+/// order restricted to these vertices when the problem has one ([`Problem::vertex_order`]).
 pub(super) fn vertex_ordering(p: &Problem<'_>) -> Result<crate::solvers::ordering::Permutation, faer::sparse::FaerError> {
     let m = p.m();
     // Group of every row: the rows of one vertex are consecutive.
@@ -219,10 +214,10 @@ pub(super) fn vertex_ordering(p: &Problem<'_>) -> Result<crate::solvers::orderin
     }
     let g = start.len();
     start.push(m);
-    // The chart's shared vertex order when there is one; else AMD, or nested dissection for
-    // large charts (see `solvers::ordering`).
+    // AMD, or nested dissection for large charts (see `solvers::ordering`); AMD taken from the
+    // chart's shared vertex order when there is one.
     use crate::solvers::ordering::OrderingKind;
-    let shared = p.vertex_order.and_then(|order| {
+    let shared = p.vertex_order.filter(|_| OrderingKind::Auto.resolve(g) == OrderingKind::Amd).and_then(|order| {
         let mut group_of = vec![u32::MAX; order.len()];
         for gv in 0..g {
             let v = p.rows[start[gv]].vertex as usize;
