@@ -7,11 +7,7 @@ mod common;
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    let mut s = common::load(std::path::Path::new(&args[1]));
-    let levels: usize = args.get(2).map(|x| x.parse().unwrap()).unwrap_or(0);
-    for _ in 0..levels {
-        s = common::subdivide(&s);
-    }
+    let s = common::mesh_from_args(&args);
     let method = Method::parse(args.get(3).map(|s| s.as_str()).unwrap_or("abf"), &[]).unwrap();
     let t = std::time::Instant::now();
     let mut o = UnwrapOptions { method, ..Default::default() };

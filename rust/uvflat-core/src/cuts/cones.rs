@@ -21,12 +21,16 @@
 //! pieces inherit, [`Chart::inherit_vertex_order`]), and one numeric factorization with the
 //! boundary held (and, on a closed chart, a ground vertex: the vertex of largest curvature).
 //! Cones are held on top of that factor by the capacitance method: with `g_c = L₀⁻¹ e_c` (one
-//! pair of triangular solves per cone, remembered), the scale factor with cones `C` is
+//! pair of triangular solves per cone, remembered; the new cones of a call are solved
+//! together, one pass over the factor), the scale factor with cones `C` is
 //! `u = u₀ + Σ_c λ_c g_c` where `G_CC λ = −u₀|_C` (a small dense system), so trying a cone
 //! costs two triangular solves, not a factorization. A closed chart's one cone is not moved
 //! (without it the system is singular). A closed chart whose cone
 //! set leaves out the ground vertex gets a second base factor grounded at the set's first cone
-//! (kept: later rounds keep their first cone), and the capacitance method on it.
+//! (kept: later rounds keep their first cone), and the capacitance method on it. A system
+//! with many vertices held at once (a whole cut, [`ScaleSolver::solve_refactored`]) is
+//! factored anew with them eliminated instead of penalised, in single precision with
+//! iterative refinement.
 //!
 //! Preconditions: a chart without defects. Degenerate triangles are safe: cotangents come
 //! from clamped angles (every triangle contributes the stiffness of a valid triangle, so `L`
@@ -44,6 +48,11 @@ use faer::{MatMut, Side};
 
 use crate::charts::Chart;
 use crate::geometry::clamped_angles;
+use crate::solvers::refined_llt::{single_pays, RefinedLlt};
+
+/// Most Green's functions `L₀⁻¹ e_c` solved in one pass over the factor (a repair or
+/// prediction round adds up to [`crate::pipeline::repair::CONES_PER_ROUND`] cones at once).
+const GREEN_BATCH: usize = 8;
 
 /// Result of [`place_cones`].
 #[derive(Debug, Clone)]
@@ -98,51 +107,14 @@ impl ScaleSolver {
     /// Assemble the cotangent Laplacian and curvature of `chart` and analyse the pattern.
     pub fn new(chart: &Chart) -> Option<ScaleSolver> {
         let n = chart.positions.len();
-        let mut sums = vec![0.0f64; n];
-        // Lower-triangle triplets (row ≥ col), merged by sorting (no hashing on large charts).
-        let mut triplets: Vec<(u32, u32, f64)> = Vec::with_capacity(9 * chart.triangles.len() + n);
-        for t in &chart.triangles {
-            let p = [chart.positions[t[0] as usize], chart.positions[t[1] as usize], chart.positions[t[2] as usize]];
-            let a = clamped_angles(p);
-            for k in 0..3 {
-                sums[t[k] as usize] += a[k];
-                let (i, j) = (t[(k + 1) % 3], t[(k + 2) % 3]);
-                let w = 0.5 / a[k].tan();
-                triplets.push((i.max(j), i.min(j), -w));
-                triplets.push((i, i, w));
-                triplets.push((j, j, w));
-            }
-        }
+        let (entries, sums) = cotan_laplacian(chart);
         let boundary = chart.boundary_mask();
         let defect: Vec<f64> =
             (0..n).map(|v| if boundary[v] { PI - sums[v] } else { 2.0 * PI - sums[v] }).collect();
-        for v in 0..n as u32 {
-            triplets.push((v, v, 0.0));
-        }
-        triplets.sort_by_key(|e| (e.1, e.0));
-        let mut entries: Vec<(u32, u32, f64)> = Vec::with_capacity(triplets.len() / 3);
-        for (r, c, w) in triplets {
-            match entries.last_mut() {
-                Some(last) if last.0 == r && last.1 == c => last.2 += w,
-                _ => entries.push((r, c, w)),
-            }
-        }
         let mean_diag = entries.iter().filter(|e| e.0 == e.1).map(|e| e.2.abs()).sum::<f64>() / n.max(1) as f64;
         let max_diag = entries.iter().filter(|e| e.0 == e.1).map(|e| e.2.abs()).fold(0.0, f64::max);
         let eps = 1e-8 * mean_diag.max(1e-300);
-        let pairs: Vec<Pair<usize, usize>> = entries.iter().map(|e| Pair { row: e.0 as usize, col: e.1 as usize }).collect();
-        let (symbolic, argsort) = SymbolicSparseColMat::try_new_from_indices(n, n, &pairs).ok()?;
-        // The chart's shared vertex order (AMD of its vertex graph, the graph of `L`).
-        let fwd: Vec<usize> = chart.vertex_order().iter().map(|&v| v as usize).collect();
-        if fwd.len() != n {
-            return None;
-        }
-        let mut inv = vec![0usize; n];
-        for (new, &old) in fwd.iter().enumerate() {
-            inv[old] = new;
-        }
-        let perm = faer::perm::PermRef::new_checked(&fwd, &inv, n);
-        let llt = factorize_symbolic_cholesky(symbolic.as_ref(), Side::Lower, SymmetricOrdering::Custom(perm), Default::default()).ok()?;
+        let (symbolic, argsort, llt) = analyse_in_vertex_order(chart, &entries)?;
         let mut diag = vec![0usize; n];
         let mut base = Vec::with_capacity(entries.len());
         for (k, e) in entries.iter().enumerate() {
@@ -154,6 +126,13 @@ impl ScaleSolver {
             }
         }
         Some(ScaleSolver { n, base, diag, entries, symbolic, argsort, llt, penalty: 1e8 * max_diag.max(1e-300), defect, boundary, base_factor: std::sync::OnceLock::new(), other_base: Default::default() })
+    }
+
+    /// Free the base factors and the Green's functions remembered on them (made again on
+    /// the next solve that needs them; the symbolic analysis is kept).
+    pub fn release_factors(&mut self) {
+        self.base_factor = std::sync::OnceLock::new();
+        self.other_base = Default::default();
     }
 
     /// Solve for `u` with `fixed` vertices (and the boundary) held at zero.
@@ -217,7 +196,7 @@ impl ScaleSolver {
         }
         let mut u = base.u0.clone();
         if !cones.is_empty() {
-            let columns: Vec<std::sync::Arc<Vec<f64>>> = cones.iter().map(|&c| self.green(base, c)).collect();
+            let columns = self.greens(base, &cones);
             let k = cones.len();
             // G_CC λ = −u₀|_C, G_CC symmetric positive definite (Cholesky, by hand: k is small).
             let mut g: Vec<f64> = (0..k * k).map(|ij| columns[ij % k][cones[ij / k] as usize]).collect();
@@ -246,23 +225,70 @@ impl ScaleSolver {
         u.iter().all(|x| x.is_finite()).then_some(u)
     }
 
-    /// `L₀⁻¹ e_c`, remembered.
-    fn green(&self, base: &BaseFactor, c: u32) -> std::sync::Arc<Vec<f64>> {
-        if let Some(g) = base.green.lock().unwrap_or_else(|e| e.into_inner()).get(&c) {
-            return g.clone();
+    /// `L₀⁻¹ e_c` for every cone `c` of `cones`, remembered; the ones not known yet are solved
+    /// together (one pass over the factor for all of them: the solves are bound by reading
+    /// the factor, so four columns at once cost little more than one).
+    fn greens(&self, base: &BaseFactor, cones: &[u32]) -> Vec<std::sync::Arc<Vec<f64>>> {
+        let mut known = base.green.lock().unwrap_or_else(|e| e.into_inner());
+        let mut missing: Vec<u32> = cones.iter().copied().filter(|c| !known.contains_key(c)).collect();
+        missing.sort_unstable();
+        missing.dedup();
+        let n = self.n;
+        for chunk in missing.chunks(GREEN_BATCH) {
+            let mut rhs = vec![0.0; n * chunk.len()];
+            for (j, &c) in chunk.iter().enumerate() {
+                rhs[j * n + c as usize] = 1.0;
+            }
+            base.llt.solve_columns_in_place(&self.llt, &mut rhs, chunk.len());
+            for (j, &c) in chunk.iter().enumerate() {
+                known.insert(c, std::sync::Arc::new(rhs[j * n..(j + 1) * n].to_vec()));
+            }
         }
-        let mut rhs = vec![0.0; self.n];
-        rhs[c as usize] = 1.0;
-        base.llt.solve_in_place(&self.llt, &mut rhs);
-        let col = std::sync::Arc::new(rhs);
-        base.green.lock().unwrap_or_else(|e| e.into_inner()).insert(c, col.clone());
-        col
+        cones.iter().map(|c| known[c].clone()).collect()
     }
 
-    /// `u` with `fixed` held, by a numeric factorization of its own (penalty on the diagonal):
-    /// the reference [`Self::solve`] agrees with.
+    /// `u` with `fixed` held, by a numeric factorization of its own: the reference
+    /// [`Self::solve`] agrees with, and the prediction of a cut chart (its cut's vertices
+    /// held, [`super::ChartCutter::predicted_ratios_after`]). The held vertices are eliminated
+    /// (their rows and columns made the identity, on the same pattern), so the system keeps
+    /// the Laplacian's conditioning and a large one is factored in single precision and
+    /// refined to double ([`crate::solvers::refined_llt`]: about half the factorization's
+    /// time, which a prediction round is mostly made of).
     pub fn solve_refactored(&self, fixed: &[u32]) -> Option<Vec<f64>> {
-        self.factor_and_solve(fixed).map(|(_, u)| u)
+        let n = self.n;
+        let mut held = self.boundary.clone();
+        for &c in fixed {
+            held[c as usize] = true;
+        }
+        // The identity's scale: the mean diagonal, so the matrix's norm and condition do not
+        // change.
+        let unit = self.diag.iter().map(|&k| self.base[k]).sum::<f64>() / n.max(1) as f64;
+        let values: Vec<f64> = self
+            .entries
+            .iter()
+            .zip(&self.base)
+            .map(|(e, &x)| match (held[e.0 as usize] || held[e.1 as usize], e.0 == e.1) {
+                (false, _) => x,
+                (true, true) => unit,
+                (true, false) => 0.0,
+            })
+            .collect();
+        let mat = SparseColMat::new_from_argsort(self.symbolic.clone(), &self.argsort, &values).ok()?;
+        drop(values);
+        let par = faer::get_global_parallelism();
+        let mut factor = RefinedLlt::<f64>::new(single_pays(n));
+        let mut mem = MemBuffer::try_new(RefinedLlt::<f64>::scratch(&self.llt, par, 1)).ok()?;
+        factor.factor(&self.llt, mat.as_ref(), Side::Lower, par, MemStack::new(&mut mem)).ok()?;
+        let mut u: Vec<f64> = (0..n).map(|i| if held[i] { 0.0 } else { -self.defect[i] }).collect();
+        factor
+            .solve_in_place(&self.llt, mat.as_ref(), Side::Lower, MatMut::from_column_major_slice_mut(&mut u, n, 1), par, MemStack::new(&mut mem))
+            .ok()?;
+        for (x, &h) in u.iter_mut().zip(&held) {
+            if h {
+                *x = 0.0;
+            }
+        }
+        u.iter().all(|x| x.is_finite()).then_some(u)
     }
 
     /// Factor `L` with `fixed` and the boundary held, and solve for `u`.
@@ -305,15 +331,73 @@ impl ScaleSolver {
     }
 }
 
+/// The cotangent Laplacian of `chart` (weights ½(cot α + cot β) from clamped angles, positive
+/// semi-definite): its lower triangle `(row, col, value)`, row ≥ col, sorted by column then
+/// row, with every diagonal present; and each vertex's angle sum. Merged by sorting (no
+/// hashing on large charts). Shared by [`ScaleSolver`] and [`super::fiedler`].
+pub(crate) fn cotan_laplacian(chart: &Chart) -> (Vec<(u32, u32, f64)>, Vec<f64>) {
+    let n = chart.positions.len();
+    let mut sums = vec![0.0f64; n];
+    let mut triplets: Vec<(u32, u32, f64)> = Vec::with_capacity(9 * chart.triangles.len() + n);
+    for t in &chart.triangles {
+        let p = [chart.positions[t[0] as usize], chart.positions[t[1] as usize], chart.positions[t[2] as usize]];
+        let a = clamped_angles(p);
+        for k in 0..3 {
+            sums[t[k] as usize] += a[k];
+            let (i, j) = (t[(k + 1) % 3], t[(k + 2) % 3]);
+            let w = 0.5 / a[k].tan();
+            triplets.push((i.max(j), i.min(j), -w));
+            triplets.push((i, i, w));
+            triplets.push((j, j, w));
+        }
+    }
+    for v in 0..n as u32 {
+        triplets.push((v, v, 0.0));
+    }
+    triplets.sort_by_key(|e| (e.1, e.0));
+    let mut entries: Vec<(u32, u32, f64)> = Vec::with_capacity(triplets.len() / 3);
+    for (r, c, w) in triplets {
+        match entries.last_mut() {
+            Some(last) if last.0 == r && last.1 == c => last.2 += w,
+            _ => entries.push((r, c, w)),
+        }
+    }
+    (entries, sums)
+}
+
+/// The symbolic Cholesky analysis of a lower-triangle pattern over `chart`'s vertices
+/// (`entries` as [`cotan_laplacian`] gives them) in the chart's shared vertex order
+/// ([`Chart::vertex_order`]): the pattern, the argsort that loads values into it, and the
+/// analysis. `None` when the pattern is invalid.
+pub(crate) fn analyse_in_vertex_order(
+    chart: &Chart,
+    entries: &[(u32, u32, f64)],
+) -> Option<(SymbolicSparseColMat<usize>, faer::sparse::Argsort<usize>, SymbolicCholesky<usize>)> {
+    let n = chart.positions.len();
+    let pairs: Vec<Pair<usize, usize>> = entries.iter().map(|e| Pair { row: e.0 as usize, col: e.1 as usize }).collect();
+    let (symbolic, argsort) = SymbolicSparseColMat::try_new_from_indices(n, n, &pairs).ok()?;
+    let fwd: Vec<usize> = chart.vertex_order().iter().map(|&v| v as usize).collect();
+    if fwd.len() != n {
+        return None;
+    }
+    let mut inv = vec![0usize; n];
+    for (new, &old) in fwd.iter().enumerate() {
+        inv[old] = new;
+    }
+    let perm = faer::perm::PermRef::new_checked(&fwd, &inv, n);
+    let llt = factorize_symbolic_cholesky(symbolic.as_ref(), Side::Lower, SymmetricOrdering::Custom(perm), Default::default()).ok()?;
+    Some((symbolic, argsort, llt))
+}
+
 /// A numeric Cholesky factor on [`ScaleSolver`]'s analysis.
-struct Factor {
+pub(crate) struct Factor {
     values: Vec<f64>,
 }
 
 impl Factor {
     /// Factor `mat` (lower triangle, the analysed pattern); `None` when it is not positive
     /// definite or memory runs out.
-    fn new(symbolic: &SymbolicCholesky<usize>, mat: &SparseColMat<usize, f64>) -> Option<Factor> {
+    pub(crate) fn new(symbolic: &SymbolicCholesky<usize>, mat: &SparseColMat<usize, f64>) -> Option<Factor> {
         let par = faer::get_global_parallelism();
         let mut values = Vec::new();
         values.try_reserve_exact(symbolic.len_val()).ok()?;
@@ -327,10 +411,15 @@ impl Factor {
 
     /// `x ← A⁻¹ x`.
     fn solve_in_place(&self, symbolic: &SymbolicCholesky<usize>, x: &mut [f64]) {
+        self.solve_columns_in_place(symbolic, x, 1);
+    }
+
+    /// `X ← A⁻¹ X` for `X` of `k` columns (column-major in `x`).
+    pub(crate) fn solve_columns_in_place(&self, symbolic: &SymbolicCholesky<usize>, x: &mut [f64], k: usize) {
         let par = faer::get_global_parallelism();
-        let n = x.len();
-        let mut mem = MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(1, par));
-        LltRef::new(symbolic, &self.values).solve_in_place_with_conj(faer::Conj::No, MatMut::from_column_major_slice_mut(x, n, 1), par, MemStack::new(&mut mem));
+        let n = x.len() / k.max(1);
+        let mut mem = MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(k, par));
+        LltRef::new(symbolic, &self.values).solve_in_place_with_conj(faer::Conj::No, MatMut::from_column_major_slice_mut(x, n, k), par, MemStack::new(&mut mem));
     }
 }
 

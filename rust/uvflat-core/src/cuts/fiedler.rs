@@ -11,7 +11,8 @@
 //! Computation: inverse iteration on the shifted pencil, `(L + σM) y = M x`, with `x` kept
 //! `M`-orthogonal to the constants (the eigenvector of `λ = 0`) and of unit `M`-norm;
 //! `σ = 10⁻⁸ · tr L / tr M` is far below `λ₂` for any mesh resolution and makes the matrix
-//! definite. One symbolic and one numeric sparse Cholesky factorization (faer), then
+//! definite. One symbolic (in the chart's shared vertex order, [`Chart::vertex_order`]) and
+//! one numeric sparse Cholesky factorization (faer), then
 //! [`MIN_ITERATIONS`] to [`MAX_ITERATIONS`] solves. The start mixes the vertices' coordinates
 //! on the chart's principal axes with a fixed hash of the vertex ids (see `start_vector`),
 //! already close to `f` on elongated charts and never blind to it. Where `λ₂` is repeated (a
@@ -25,13 +26,10 @@
 //! fails, or a value is not finite; the caller falls back to a planar split. Deterministic:
 //! no randomness, sums in a fixed order.
 
-use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
-use faer::sparse::{Pair, SparseColMat, SymbolicSparseColMat};
-use faer::{Mat, Side};
+use faer::sparse::SparseColMat;
 
 use crate::charts::Chart;
-use crate::geometry::{clamped_angles, triangle_area};
+use crate::geometry::triangle_area;
 
 /// Most inverse-iteration solves.
 pub const MAX_ITERATIONS: usize = 40;
@@ -47,19 +45,12 @@ pub fn fiedler_vector(chart: &Chart) -> Option<Vec<f64>> {
         return None;
     }
     // Lower triangle of L (row ≥ col) and the lumped mass.
-    let mut map: std::collections::HashMap<(u32, u32), f64> = std::collections::HashMap::new();
+    let (entries, _) = super::cones::cotan_laplacian(chart);
     let mut mass = vec![0.0f64; n];
     for t in &chart.triangles {
-        let p = [chart.positions[t[0] as usize], chart.positions[t[1] as usize], chart.positions[t[2] as usize]];
-        let a = clamped_angles(p);
-        let area = triangle_area(p);
-        for k in 0..3 {
-            mass[t[k] as usize] += area / 3.0;
-            let (i, j) = (t[(k + 1) % 3], t[(k + 2) % 3]);
-            let w = 0.5 / a[k].tan();
-            *map.entry((i.max(j), i.min(j))).or_insert(0.0) -= w;
-            *map.entry((i, i)).or_insert(0.0) += w;
-            *map.entry((j, j)).or_insert(0.0) += w;
+        let area = triangle_area([chart.positions[t[0] as usize], chart.positions[t[1] as usize], chart.positions[t[2] as usize]]);
+        for &v in t {
+            mass[v as usize] += area / 3.0;
         }
     }
     let total_mass: f64 = mass.iter().sum();
@@ -72,30 +63,24 @@ pub fn fiedler_vector(chart: &Chart) -> Option<Vec<f64>> {
         *m = m.max(floor);
     }
     let total_mass: f64 = mass.iter().sum();
-    for v in 0..n as u32 {
-        map.entry((v, v)).or_insert(0.0);
-    }
-    let mut entries: Vec<(u32, u32, f64)> = map.into_iter().map(|((r, c), w)| (r, c, w)).collect();
-    entries.sort_unstable_by_key(|e| (e.1, e.0));
     let trace_l: f64 = entries.iter().filter(|e| e.0 == e.1).map(|e| e.2).sum();
     let sigma = 1e-8 * trace_l.max(1e-300) / total_mass;
     let eps = 1e-12 * trace_l.max(1e-300) / n as f64;
-    let pairs: Vec<Pair<usize, usize>> = entries.iter().map(|e| Pair { row: e.0 as usize, col: e.1 as usize }).collect();
-    let (symbolic, argsort) = SymbolicSparseColMat::try_new_from_indices(n, n, &pairs).ok()?;
+    // Analysed in the chart's shared vertex order (the cone system's, when the chart was cut).
+    let (symbolic, argsort, llt) = super::cones::analyse_in_vertex_order(chart, &entries)?;
     let values: Vec<f64> =
         entries.iter().map(|e| if e.0 == e.1 { e.2 + sigma * mass[e.0 as usize] + eps } else { e.2 }).collect();
-    let llt = SymbolicLlt::try_new(symbolic.as_ref(), Side::Lower).ok()?;
     let mat = SparseColMat::new_from_argsort(symbolic, &argsort, &values).ok()?;
-    let factor = Llt::try_new_with_symbolic(llt, mat.as_ref(), Side::Lower).ok()?;
+    let factor = super::cones::Factor::new(&llt, &mat)?;
+    drop((mat, values, entries));
 
     let mut x = start_vector(chart, &mass);
     if !normalise(&mut x, &mass) {
         return None;
     }
     for it in 0..MAX_ITERATIONS {
-        let mut rhs = Mat::<f64>::from_fn(n, 1, |i, _| mass[i] * x[i]);
-        factor.solve_in_place(rhs.as_mut());
-        let mut y: Vec<f64> = (0..n).map(|i| rhs[(i, 0)]).collect();
+        let mut y: Vec<f64> = (0..n).map(|i| mass[i] * x[i]).collect();
+        factor.solve_columns_in_place(&llt, &mut y, 1);
         if !normalise(&mut y, &mass) {
             return None;
         }

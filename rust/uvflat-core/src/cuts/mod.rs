@@ -370,6 +370,15 @@ impl<'a> ChartCutter<'a> {
         &self.cost
     }
 
+    /// Free the scale system's numeric factors and remembered solves (the next cut that
+    /// needs them factors again; the analysis is kept): on a large chart they would otherwise
+    /// stay in memory beside the method's own factor while it solves the pieces.
+    pub fn release_factors(&mut self) {
+        if let Some(solver) = self.solver.as_mut() {
+            solver.release_factors();
+        }
+    }
+
     /// Per chart vertex: whether it may become a cone (inside the chart, not avoided, a
     /// positive angle defect: not a saddle).
     pub fn allowed(&self) -> &[bool] {

@@ -64,14 +64,28 @@ struct Node {
 }
 
 impl Bvh {
-    /// Build the tree over `triangles` (corner positions).
+    /// Build the tree over `triangles` (corner positions). Median splits along the longest
+    /// axis of the centroids' box (ties by triangle id); each triangle's centroid and box sit
+    /// beside its id, so a split reads one contiguous slice (no lookups scattered over the
+    /// triangle list: at 576k triangles the build took a second that way).
     pub fn new(triangles: Vec<[[f64; 3]; 3]>) -> Bvh {
+        #[derive(Clone, Copy)]
+        struct Item {
+            centroid: [f64; 3],
+            lo: [f64; 3],
+            hi: [f64; 3],
+            id: u32,
+        }
         let n = triangles.len();
-        let centroid: Vec<[f64; 3]> = triangles
+        let mut items: Vec<Item> = triangles
             .iter()
-            .map(|t| [(t[0][0] + t[1][0] + t[2][0]) / 3.0, (t[0][1] + t[1][1] + t[2][1]) / 3.0, (t[0][2] + t[1][2] + t[2][2]) / 3.0])
+            .enumerate()
+            .map(|(id, t)| {
+                let (lo, hi) = bounds(t.iter());
+                let centroid = [(t[0][0] + t[1][0] + t[2][0]) / 3.0, (t[0][1] + t[1][1] + t[2][1]) / 3.0, (t[0][2] + t[1][2] + t[2][2]) / 3.0];
+                Item { centroid, lo, hi, id: id as u32 }
+            })
             .collect();
-        let mut order: Vec<u32> = (0..n as u32).collect();
         let mut nodes = Vec::with_capacity(2 * n.div_ceil(LEAF).max(1));
         if n > 0 {
             // Explicit stack of (node index, range) to fill.
@@ -80,17 +94,12 @@ impl Bvh {
             while let Some((id, a, b)) = stack.pop() {
                 let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
                 let (mut clo, mut chi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-                for &t in &order[a..b] {
-                    for p in &triangles[t as usize] {
-                        for k in 0..3 {
-                            lo[k] = lo[k].min(p[k]);
-                            hi[k] = hi[k].max(p[k]);
-                        }
-                    }
-                    let c = centroid[t as usize];
+                for it in &items[a..b] {
                     for k in 0..3 {
-                        clo[k] = clo[k].min(c[k]);
-                        chi[k] = chi[k].max(c[k]);
+                        lo[k] = lo[k].min(it.lo[k]);
+                        hi[k] = hi[k].max(it.hi[k]);
+                        clo[k] = clo[k].min(it.centroid[k]);
+                        chi[k] = chi[k].max(it.centroid[k]);
                     }
                 }
                 nodes[id].lo = lo;
@@ -107,9 +116,7 @@ impl Bvh {
                     continue;
                 }
                 let mid = (a + b) / 2;
-                order[a..b].select_nth_unstable_by(mid - a, |&x, &y| {
-                    centroid[x as usize][axis].total_cmp(&centroid[y as usize][axis]).then(x.cmp(&y))
-                });
+                items[a..b].select_nth_unstable_by(mid - a, |x, y| x.centroid[axis].total_cmp(&y.centroid[axis]).then(x.id.cmp(&y.id)));
                 let left = nodes.len();
                 nodes.push(Node { lo: [0.0; 3], hi: [0.0; 3], start: 0, count: 0 });
                 let right = nodes.len();
@@ -121,7 +128,7 @@ impl Bvh {
                 stack.push((left, a, mid));
             }
         }
-        let triangles = order.iter().map(|&t| triangles[t as usize]).collect();
+        let triangles = items.iter().map(|it| triangles[it.id as usize]).collect();
         Bvh { nodes, triangles }
     }
 

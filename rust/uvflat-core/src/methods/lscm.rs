@@ -289,8 +289,15 @@ mod tests {
         let shared = solve(&chart, &[]).unwrap().uv;
         let diff = own.iter().zip(&shared).fold(0.0f64, |m, (a, b)| m.max((a[0] - b[0]).abs()).max((a[1] - b[1]).abs()));
         assert!(diff < 1e-10, "maps differ by {diff}");
-        // A clone (whose triangles may be changed) computes its own again.
+        // A clone (whose triangles may be changed) computes its own again; a copy with moved
+        // vertices only (a method's unit frame) keeps it.
         assert!(matches!(chart.clone().ordering_if_known(OrderingKind::Amd), Ordering::Kind(_)));
+        let moved = chart.with_positions(chart.positions.iter().map(|p| [2.0 * p[0], 2.0 * p[1], 2.0 * p[2]]).collect());
+        match (moved.ordering_if_known(OrderingKind::Amd), chart.ordering_if_known(OrderingKind::Amd)) {
+            (Ordering::Vertices { order: a, .. }, Ordering::Vertices { order: b, .. }) => assert_eq!(a, b),
+            _ => panic!("the moved copy lost the shared order"),
+        }
+        assert_eq!(moved.positions[1], [2.0 * chart.positions[1][0], 2.0 * chart.positions[1][1], 2.0 * chart.positions[1][2]]);
     }
 
     /// The angle form equals ½ Σ cot α |e_opp|² − A on an arbitrary triangle and map.

@@ -475,8 +475,7 @@ impl Method {
 fn unit_chart(chart: &Chart, pins: &[(u32, [f64; 2])]) -> (Chart, Vec<(u32, [f64; 2])>, f64) {
     let (centre, size) = crate::geometry::bounding_frame(&chart.positions);
     let size = 2f64.powi(size.log2().round() as i32);
-    let mut unit = chart.clone();
-    unit.positions = crate::geometry::to_unit_frame(&chart.positions, centre, size);
+    let unit = chart.with_positions(crate::geometry::to_unit_frame(&chart.positions, centre, size));
     let pins = pins.iter().map(|&(v, p)| (v, [p[0] / size, p[1] / size])).collect();
     (unit, pins, size)
 }

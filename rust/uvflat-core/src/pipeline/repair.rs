@@ -12,7 +12,8 @@
 //! several cones at once, the rounds go back to the best attempt and add one cone at a time;
 //! after one cone, they end and the chart is split (each round is a whole solve). An attempt
 //! whose only problem is an outline that crosses itself gets one more round with one cone at
-//! most (several cones rarely uncross an outline; a split does). The
+//! most (several cones rarely uncross an outline; a split does), except on a large chart
+//! (`OUTLINE_RETRY_BELOW`), where that round is a costly solve that did not help. The
 //! best attempt is kept (fewest failures, flips, overlaps, non-disks, then the least area
 //! beyond the density bound, then the fewest pieces). When no round keeps the rule, the chart
 //! is halved ([`crate::cuts::split`], along the cheapest loop by the cutter's edge costs) and
@@ -54,7 +55,7 @@ pub fn repair<'a>(
 ) -> Vec<Piece> {
     let t = std::time::Instant::now();
     let mask = face_mask(ctx.mesh.n_faces(), chart);
-    let cutter = cutter.unwrap_or_else(|| self::cutter(ctx, chart));
+    let mut cutter = cutter.unwrap_or_else(|| self::cutter(ctx, chart));
     ctx.clock.add(|p| p.plan_cuts += t.elapsed().as_secs_f64());
     let mut seed: Vec<u32> = Vec::new();
     let mut best: Vec<Piece> = Vec::new();
@@ -100,6 +101,11 @@ pub fn repair<'a>(
         for c in &sub {
             c.inherit_vertex_order(chart);
         }
+        if chart.triangles.len() >= SEQUENTIAL_HALVES_FROM {
+            // The scale system's factor (0.2 GB at 576k triangles) would sit beside the
+            // method's during the solve; a later round factors it again (about 0.7 s there).
+            cutter.release_factors();
+        }
         ctx.clock.add(|p| p.plan_cuts += t.elapsed().as_secs_f64());
         let t = std::time::Instant::now();
         let n_pieces = sub.len();
@@ -143,9 +149,10 @@ pub fn repair<'a>(
         if valid {
             break;
         }
-        if only_outline && single {
-            // Still only an outline that crosses itself after a one-cone round: more cones
-            // do not uncross it, a split does.
+        if only_outline && (single || chart.triangles.len() >= OUTLINE_RETRY_BELOW) {
+            // Still only an outline that crosses itself after a one-cone round (or at once on
+            // a large chart, [`OUTLINE_RETRY_BELOW`]): more cones do not uncross it, a split
+            // does.
             break;
         }
         if progress && !next.is_empty() && !only_outline {
@@ -167,6 +174,9 @@ pub fn repair<'a>(
         // attempt per chart of that level, so the work stays bounded).
         let t = std::time::Instant::now();
         let candidates = cuts::split::candidates(cutter.graph(), cutter.costs(), chart, ctx.avoid);
+        // The chart's cutting state (its graph, costs and the scale system's factor: 0.3 GB
+        // on a 576k-triangle chart) is not needed by the halves, which make their own.
+        drop(cutter);
         ctx.clock.add(|p| p.plan_cuts += t.elapsed().as_secs_f64());
         let tries = if depth + 1 == cuts::MAX_SPLIT_DEPTH { candidates.len() } else { 1 };
         for split in candidates.into_iter().take(tries).filter(|s| !s.is_empty()) {
@@ -222,6 +232,15 @@ pub fn repair<'a>(
 /// triangles), `slim`'s halves of 231k and 344k triangles peaked at 1.71 GB solved in turn
 /// against 2.03 GB in parallel, in the same time (115.6 s and 118.9 s, one run each).
 pub const SEQUENTIAL_HALVES_FROM: usize = 100_000;
+
+/// A chart of at least this many triangles whose only problem is an outline that crosses
+/// itself goes straight to the split, without the one-cone round smaller charts get: that
+/// round is a whole solve of the chart (24.8 s for `slim` on fertility split 1→4 three times,
+/// 576k triangles, where it did not uncross the outline and the split followed anyway). On
+/// smaller charts the round sometimes uncrosses it and saves the split's islands: that
+/// fertility's 231k-triangle half with `slim` (one island instead of four when the round
+/// was skipped there too), the cow's and the beetle's last pieces with `abf`.
+pub const OUTLINE_RETRY_BELOW: usize = 300_000;
 
 /// Whether every piece is mapped and keeps the rule.
 pub fn all_valid(ctx: &Context<'_, '_>, pieces: &[Piece]) -> bool {

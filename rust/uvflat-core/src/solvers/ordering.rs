@@ -19,10 +19,15 @@
 //! thinned: a separator vertex with no neighbour on the `B` side joins `A`. Parts of at most
 //! [`ND_LEAF_SIZE`] vertices are ordered by AMD. Meshes are nearly planar graphs whose BFS
 //! levels are short closed curves, which makes these separators `O(√n)` — what a geometric
-//! bisection would give, without needing positions.
+//! bisection would give, without needing positions. The two sides of a large part (from
+//! `ND_PARALLEL_MIN` vertices) are dissected in parallel; each side's order depends only on
+//! its own vertices, so the result is the same on any number of threads.
 //!
 //! Preconditions: a square pattern (any triangle, or both; the diagonal is ignored).
 //! Failures: only faer's allocation / index overflow errors from AMD.
+
+use std::sync::atomic::Ordering::Relaxed;
+use std::sync::atomic::{AtomicU32, AtomicU64};
 
 use faer::sparse::FaerError;
 
@@ -498,33 +503,40 @@ fn amd_of_subset(g: &Graph, verts: &[usize], local: &mut [usize]) -> Result<Vec<
 /// Nested dissection of the whole graph.
 fn nested_dissection(g: &Graph) -> Result<Permutation, FaerError> {
     let n = g.n();
-    let mut d = Dissector {
-        g,
-        state: vec![[0u32; 2]; n],
-        next_region: 1,
-        next_stamp: 0,
-        spare: Vec::new(),
-        local: vec![usize::MAX; n],
-        out: Vec::with_capacity(n),
-    };
-    d.dissect((0..n).collect(), 0)?;
-    debug_assert_eq!(d.out.len(), n);
-    Ok(Permutation::from_fwd(d.out))
+    let d = Dissector { g, state: (0..n).map(|_| AtomicU64::new(0)).collect(), next_region: AtomicU32::new(1), next_stamp: AtomicU32::new(0) };
+    let out = d.dissect((0..n).collect(), 0, &mut Scratch::new(n))?;
+    debug_assert_eq!(out.len(), n);
+    Ok(Permutation::from_fwd(out))
 }
 
+/// Parts with at least this many vertices have their two sides dissected in parallel (each
+/// side's order depends only on its own vertices, so the result does not depend on threads).
+const ND_PARALLEL_MIN: usize = 20_000;
+
+/// The state shared by the parallel dissection of one graph.
 struct Dissector<'g> {
     g: &'g Graph,
-    /// Region (sub-problem) of every vertex (searches stay inside one region) and its
-    /// breadth-first search visit stamp, side by side: one memory access per neighbour.
-    state: Vec<[u32; 2]>,
-    next_region: u32,
-    next_stamp: u32,
+    /// Per vertex, its region (the sub-problem it belongs to: searches stay inside one) in the
+    /// high 32 bits and its breadth-first search visit stamp in the low 32, in one word: one
+    /// memory access per neighbour. Only the task that owns a region writes its vertices;
+    /// others read them only to see that they are not theirs (region ids are never reused).
+    state: Vec<AtomicU64>,
+    next_region: AtomicU32,
+    next_stamp: AtomicU32,
+}
+
+/// One task's buffers.
+struct Scratch {
     /// Level structures of finished searches, whose buffers the next searches reuse.
     spare: Vec<Levels>,
     /// Scratch for [`amd_of_subset`].
     local: Vec<usize>,
-    /// The elimination order built so far.
-    out: Vec<usize>,
+}
+
+impl Scratch {
+    fn new(n: usize) -> Scratch {
+        Scratch { spare: Vec::new(), local: vec![usize::MAX; n] }
+    }
 }
 
 /// Breadth-first level structure: vertices in visit order and the start of every level.
@@ -543,25 +555,29 @@ impl Levels {
 }
 
 impl Dissector<'_> {
-    fn new_region(&mut self, verts: &[usize]) {
-        let r = self.next_region;
-        self.next_region += 1;
+    fn region(&self, v: usize) -> u32 {
+        (self.state[v].load(Relaxed) >> 32) as u32
+    }
+
+    fn new_region(&self, verts: &[usize]) -> u32 {
+        let r = self.next_region.fetch_add(1, Relaxed);
         for &v in verts {
-            self.state[v][0] = r;
+            self.state[v].store((r as u64) << 32, Relaxed);
         }
+        r
     }
 
     /// Level structure from `root` inside `root`'s region.
-    fn bfs(&mut self, root: usize) -> Levels {
-        self.next_stamp += 1;
-        let s = self.next_stamp;
-        let r = self.state[root][0];
-        let Levels { mut order, mut start } = self.spare.pop().unwrap_or(Levels { order: Vec::new(), start: Vec::new() });
+    fn bfs(&self, root: usize, scratch: &mut Scratch) -> (Levels, u32) {
+        let s = self.next_stamp.fetch_add(1, Relaxed) + 1;
+        let r = self.region(root);
+        let tag = ((r as u64) << 32) | s as u64;
+        let Levels { mut order, mut start } = scratch.spare.pop().unwrap_or(Levels { order: Vec::new(), start: Vec::new() });
         order.clear();
         start.clear();
         order.push(root);
         start.push(0);
-        self.state[root][1] = s;
+        self.state[root].store(tag, Relaxed);
         let mut head = 0;
         while head < order.len() {
             // Visit the whole current level, appending the next one.
@@ -570,47 +586,43 @@ impl Dissector<'_> {
                 let v = order[head];
                 head += 1;
                 for &w in self.g.neighbours(v) {
-                    let st = &mut self.state[w];
-                    if st[0] == r && st[1] != s {
-                        st[1] = s;
+                    let st = self.state[w].load(Relaxed);
+                    if (st >> 32) as u32 == r && st != tag {
+                        self.state[w].store(tag, Relaxed);
                         order.push(w);
                     }
                 }
             }
             start.push(end);
         }
-        Levels { order, start }
+        (Levels { order, start }, s)
     }
 
-    /// Append an elimination order of `verts` (all in one fresh region) to `out`.
-    fn dissect(&mut self, verts: Vec<usize>, depth: usize) -> Result<(), FaerError> {
+    /// An elimination order of `verts` (all in one fresh region).
+    fn dissect(&self, verts: Vec<usize>, depth: usize, scratch: &mut Scratch) -> Result<Vec<usize>, FaerError> {
         if verts.len() <= ND_LEAF_SIZE || depth > 64 {
-            let ordered = amd_of_subset(self.g, &verts, &mut self.local)?;
-            self.out.extend(ordered);
-            return Ok(());
+            return amd_of_subset(self.g, &verts, &mut scratch.local);
         }
         self.new_region(&verts);
         // Pseudo-peripheral root: repeat the search from a narrowest vertex of the last level
         // while the depth grows.
-        let mut levels = self.bfs(verts[0]);
+        let (mut levels, first_stamp) = self.bfs(verts[0], scratch);
         if levels.order.len() < verts.len() {
-            return self.split_components(verts, levels, depth);
+            return self.split_components(verts, levels, first_stamp, depth, scratch);
         }
         for _ in 0..4 {
             let last = levels.level(levels.depth() - 1);
             let root = *last.iter().min_by_key(|&&v| self.g.neighbours(v).len()).expect("levels are non-empty");
-            let next = self.bfs(root);
+            let (next, _) = self.bfs(root, scratch);
             if next.depth() <= levels.depth() {
-                self.spare.push(next);
+                scratch.spare.push(next);
                 break;
             }
-            self.spare.push(std::mem::replace(&mut levels, next));
+            scratch.spare.push(std::mem::replace(&mut levels, next));
         }
         let m = levels.depth();
         if m < 3 {
-            let ordered = amd_of_subset(self.g, &verts, &mut self.local)?;
-            self.out.extend(ordered);
-            return Ok(());
+            return amd_of_subset(self.g, &verts, &mut scratch.local);
         }
         // Separator level k in 1..m-1 minimising |S|·n / (|A|·|B|).
         let n = verts.len();
@@ -629,39 +641,43 @@ impl Dissector<'_> {
         let mut part_a: Vec<usize> = levels.order[..levels.start[k]].to_vec();
         let part_b: Vec<usize> = levels.order[levels.start[k + 1]..].to_vec();
         // Thin the separator: a level-k vertex with no neighbour in B separates nothing.
-        let rb = self.next_region;
-        self.new_region(&part_b);
+        let rb = self.new_region(&part_b);
         let mut sep = Vec::new();
         for &v in levels.level(k) {
-            if self.g.neighbours(v).iter().any(|&w| self.state[w][0] == rb) {
+            if self.g.neighbours(v).iter().any(|&w| self.region(w) == rb) {
                 sep.push(v);
             } else {
                 part_a.push(v);
             }
         }
-        self.spare.push(levels);
-        self.dissect(part_a, depth + 1)?;
-        self.dissect(part_b, depth + 1)?;
-        self.out.extend(sep);
-        Ok(())
+        scratch.spare.push(levels);
+        let (a, b) = if n >= ND_PARALLEL_MIN {
+            rayon::join(|| self.dissect(part_a, depth + 1, scratch), || self.dissect(part_b, depth + 1, &mut Scratch::new(self.g.n())))
+        } else {
+            (self.dissect(part_a, depth + 1, scratch), self.dissect(part_b, depth + 1, scratch))
+        };
+        let mut out = a?;
+        out.extend(b?);
+        out.extend(sep);
+        Ok(out)
     }
 
     /// `verts` is disconnected: order each connected component on its own.
-    fn split_components(&mut self, verts: Vec<usize>, first: Levels, depth: usize) -> Result<(), FaerError> {
+    fn split_components(&self, verts: Vec<usize>, first: Levels, first_stamp: u32, depth: usize, scratch: &mut Scratch) -> Result<Vec<usize>, FaerError> {
         // Vertices reached by the first search carry its stamp, those of later searches
-        // larger ones; unreached vertices older ones.
-        let first_stamp = self.next_stamp;
+        // larger ones; unreached vertices the region's fresh 0.
         let mut components = vec![first.order];
         for &v in &verts {
-            if self.state[v][1] < first_stamp {
-                let comp = self.bfs(v).order;
+            if ((self.state[v].load(Relaxed) & 0xFFFF_FFFF) as u32) < first_stamp {
+                let comp = self.bfs(v, scratch).0.order;
                 components.push(comp);
             }
         }
+        let mut out = Vec::with_capacity(verts.len());
         for comp in components {
-            self.dissect(comp, depth + 1)?;
+            out.extend(self.dissect(comp, depth + 1, scratch)?);
         }
-        Ok(())
+        Ok(out)
     }
 }
 
@@ -754,6 +770,39 @@ mod tests {
             let (col_ptr, row_idx): (Vec<usize>, Vec<usize>) = ((0..=n).collect(), (0..n).collect());
             let p = fill_reducing(OrderingKind::NestedDissection, n, &col_ptr, &row_idx).unwrap();
             assert_permutation(&p, n);
+        }
+    }
+
+    /// Large parts are dissected in parallel: the order is the same on one thread as on
+    /// several, also with disconnected pieces (a grid beside a cut-up copy).
+    #[test]
+    fn nested_dissection_does_not_depend_on_threads() {
+        let k = 160;
+        let (n, mut col_ptr, mut row_idx) = grid(k);
+        assert!(n >= ND_PARALLEL_MIN, "parallel dissection is exercised");
+        // A second grid whose columns 40 and 41 are not joined (two components).
+        for j in 0..k {
+            for i in 0..k {
+                let v = n + j * k + i;
+                row_idx.push(v);
+                if i + 1 < k && i != 40 {
+                    row_idx.push(v + 1);
+                }
+                if j + 1 < k {
+                    row_idx.push(v + k);
+                }
+                col_ptr.push(row_idx.len());
+            }
+        }
+        let m = 2 * n;
+        let order = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| fill_reducing(OrderingKind::NestedDissection, m, &col_ptr, &row_idx).unwrap())
+        };
+        let one = order(1);
+        assert_permutation(&one, m);
+        for threads in [2, 4] {
+            assert_eq!(order(threads).fwd, one.fwd, "{threads} threads");
         }
     }
 

@@ -155,6 +155,16 @@ pub fn cut_cylinder(nu: usize, nv: usize, h: f64) -> (Soup, Vec<[u32; 2]>) {
 }
 
 /// Split every triangle into four at its edge midpoints (triangle meshes only).
+/// The mesh at `args[1]` subdivided `args[2]` times (0 when absent): the examples' input.
+pub fn mesh_from_args(args: &[String]) -> Soup {
+    let mut s = load(std::path::Path::new(&args[1]));
+    let levels: usize = args.get(2).map(|x| x.parse().expect("LEVELS is a number")).unwrap_or(0);
+    for _ in 0..levels {
+        s = subdivide(&s);
+    }
+    s
+}
+
 pub fn subdivide(s: &Soup) -> Soup {
     assert!(s.face_sizes.iter().all(|&k| k == 3), "subdivision needs a triangle mesh");
     let mut positions = s.positions.clone();
