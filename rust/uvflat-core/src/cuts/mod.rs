@@ -415,22 +415,10 @@ impl<'a> ChartCutter<'a> {
                 is_cut[id] = true;
             }
         }
-        let mut parent: Vec<u32> = (0..graph.polygons.len() as u32).collect();
-        fn find(parent: &mut [u32], mut x: u32) -> u32 {
-            while parent[x as usize] != x {
-                parent[x as usize] = parent[parent[x as usize] as usize];
-                x = parent[x as usize];
-            }
-            x
-        }
+        let mut uf = crate::charts::UnionFind::new(graph.polygons.len());
         let mut pieces = graph.polygons.len();
         for (e, p) in graph.edge_polygons.iter().enumerate() {
-            if is_cut[e] || p[1] == u32::MAX {
-                continue;
-            }
-            let (a, b) = (find(&mut parent, p[0]), find(&mut parent, p[1]));
-            if a != b {
-                parent[a.max(b) as usize] = a.min(b);
+            if !is_cut[e] && p[1] != u32::MAX && uf.union(p[0], p[1]) {
                 pieces -= 1;
             }
         }
