@@ -1461,8 +1461,10 @@ def test_phases_account_for_the_pipeline():
     r = uvflat.unwrap(pos, cv, fs, method="abf")
     p = r.phases
     assert set(p) == {"build_charts", "plan_cuts", "solve", "repair_solve", "measure",
-                      "predicted_rounds", "repair_rounds", "repair_pieces", "splits"}
+                      "predicted_rounds", "repair_rounds", "repair_pieces", "splits", "last_resort"}
     assert all(v >= 0 for v in p.values())
+    # Every piece of the cube keeps the rule with ABF: nothing handed to scaffold.
+    assert p["last_resort"] == 0 and all(c.method == "abf" for c in r.charts)
     # A closed cube is cut: planned and solved in at least one repair round.
     assert p["repair_rounds"] >= 1 and p["repair_pieces"] >= 1 and p["plan_cuts"] > 0
     r = uvflat.unwrap(pos, cv, fs, method="abf", auto_seams=False)
@@ -1471,3 +1473,46 @@ def test_phases_account_for_the_pipeline():
     # ABF (conformal) plans the cube's cones on the prediction first; SLIM does not.
     assert uvflat.unwrap(pos, cv, fs, method="abf").phases["predicted_rounds"] >= 1
     assert uvflat.unwrap(pos, cv, fs, method="slim").phases["predicted_rounds"] == 0
+
+
+def test_pieces_still_broken_after_repair_are_mapped_by_scaffold():
+    # The cow with holes cut into it, as a scan loses patches: LSCM lays cuts that join a hole
+    # to the outline flat on themselves and crushes regions its cones were not planned for, so
+    # some pieces break the rule at every split level; each is mapped by scaffold, reported as
+    # a fallback naming LSCM, and the whole atlas keeps the rule as measured on the UVs.
+    from meshio_util import mesh_path, read_off
+    pos, cv, fs = read_off(mesh_path("cow.off"))
+    starts = np.concatenate([[0], np.cumsum(fs)[:-1]])
+    faces = [tuple(cv[a:a + n]) for a, n in zip(starts, fs)]
+    by_edge = {}
+    for f, face in enumerate(faces):
+        for a, b in zip(face, face[1:] + face[:1]):
+            by_edge.setdefault((min(a, b), max(a, b)), []).append(f)
+    dead = set()
+    for seed in (11, 1800, 2900, 4100, 5000):
+        queue, taken = [seed], {seed}
+        while queue and len(taken) < 60:
+            face = faces[queue.pop(0)]
+            for a, b in zip(face, face[1:] + face[:1]):
+                for g in by_edge[(min(a, b), max(a, b))]:
+                    if g not in taken and len(taken) < 60:
+                        taken.add(g)
+                        queue.append(g)
+        dead |= taken
+    keep = [f for f in range(len(faces)) if f not in dead]
+    cv2 = np.concatenate([cv[starts[f]:starts[f] + fs[f]] for f in keep])
+    fs2 = fs[keep]
+    r = uvflat.unwrap(pos, cv2, fs2, method="lscm")
+    fell_back = [c for c in r.charts if c.method == "scaffold"]
+    assert fell_back, "the test mesh should make LSCM break the rule somewhere"
+    assert r.phases["last_resort"] >= len(fell_back)
+    for c in fell_back:
+        assert c.status == "fallback" and c.reason_code == "fallback"
+        assert c.reason.startswith("lscm broke the atlas rule") and "scaffold" in c.reason
+    assert all(c.status in ("solved", "fallback") for c in r.charts), [c.reason for c in r.charts]
+    m = uvflat.metrics(pos, cv2, fs2, r.uv)
+    assert m.flips == 0 and m.overlapping_charts == 0
+    assert max(c.density_outside for c in r.charts) <= 0.05
+    # Without automatic seams nothing is replaced: a broken island says so.
+    r = uvflat.unwrap(pos, cv2, fs2, method="lscm", auto_seams=False)
+    assert r.phases["last_resort"] == 0 and all(c.method == "lscm" for c in r.charts)

@@ -713,3 +713,34 @@ def test_batch_symmetry_marks_mirrored_seams(tmp_path):
     assert r.returncode == 0, r.stdout + r.stderr
     faces = [ln for ln in (tmp_path / "full.obj").read_text().splitlines() if ln.startswith("f ")]
     assert len(faces) == 96 and all("/" in f for f in faces)
+
+
+def test_robustness_variants_are_valid_meshes_of_the_promised_kind():
+    """The variants of ``blender_scripts/robustness.py`` are what its docs say: holes remove at
+    most the faces asked, quads and n-gons merge faces into polygons of distinct vertices, and
+    every variant is a mesh uvflat accepts (deterministic: the same twice)."""
+    sys.path.insert(0, str(REPO / "blender_scripts"))
+    import robustness
+    import uvflat
+    from meshio_util import read_mesh
+    mesh = read_mesh("cow.off")
+    n = len(mesh[2])
+    holes = robustness.holes(mesh, 6, 60, 1)
+    assert n - 6 * 60 <= len(holes[2]) < n
+    quads = robustness.quads(mesh, 3)
+    assert set(quads[2].tolist()) == {3, 4} and (quads[2] == 4).sum() > n // 4
+    assert 2 * (quads[2] == 4).sum() + (quads[2] == 3).sum() == n
+    ngons = robustness.ngons(mesh, 0.3, 7)
+    big = ngons[2][ngons[2] > 3]
+    assert len(big) > 0 and big.min() >= 5 and big.max() <= 8
+    assert big.sum() + (ngons[2] == 3).sum() == n  # each n-gon replaces its n triangles
+    for p, c, s in (holes, quads, ngons):
+        starts = np.concatenate([[0], np.cumsum(s)[:-1]])
+        assert all(len(set(c[a:a + k].tolist())) == k for a, k in zip(starts, s))
+        assert c.max() < len(p)
+        r = uvflat.unwrap(p, c, s, method="abf")
+        assert all(ch.status in ("solved", "fallback") for ch in r.charts), [ch.reason for ch in r.charts]
+    again = robustness.quads(mesh, 3)
+    assert all(np.array_equal(x, y) for x, y in zip(quads, again))
+    parts = robustness.side_by_side([mesh, quads])
+    assert len(parts[2]) == n + len(quads[2]) and np.ptp(parts[0][:, 1]) <= 1.0 + 1e-9

@@ -130,11 +130,25 @@ def test_promising_methods_keep_quads_strictly_convex(method, split):
 
 def test_lscm_folds_quads_and_says_so():
     """The grid above is hard enough that LSCM (no promise) folds quads: the checks can fail,
-    and what the reports count is what an independent check finds."""
+    and what the reports count is what an independent check finds. Automatic seams off: with
+    them on, a piece LSCM folds is mapped by scaffold instead (next test)."""
     positions, corner_verts, face_sizes, seams = curved_quad_grid(20, 3)
-    r = uvflat.unwrap(positions, corner_verts, face_sizes, method="lscm", seams=seams)
+    r = uvflat.unwrap(positions, corner_verts, face_sizes, method="lscm", seams=seams, auto_seams=False)
     bad = nonconvex_quads(face_sizes, r.uv, np.asarray(r.chart))
     assert bad > 0
     reported = sum(c.flips for c in r.charts)
     assert reported >= bad  # a quad folded on both splits counts its two folds
     assert uvflat.metrics(positions, corner_verts, face_sizes, r.uv).flips == reported
+
+
+def test_with_automatic_seams_folded_lscm_pieces_are_mapped_by_scaffold():
+    """The same grid with automatic seams on: the pieces LSCM folds are handed to scaffold,
+    which keeps every quad convex, and say so; the rest keep LSCM's map."""
+    positions, corner_verts, face_sizes, seams = curved_quad_grid(20, 3)
+    r = uvflat.unwrap(positions, corner_verts, face_sizes, method="lscm", seams=seams)
+    assert nonconvex_quads(face_sizes, r.uv, np.asarray(r.chart)) == 0
+    assert sum(c.flips for c in r.charts) == 0 == uvflat.metrics(positions, corner_verts, face_sizes, r.uv).flips
+    by = {c.method for c in r.charts}
+    assert "scaffold" in by, by
+    for c in r.charts:
+        assert c.status == ("fallback" if c.method == "scaffold" else "solved"), (c.method, c.reason)

@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::{cube, load, shared_meshes, soup_of, sphere, Soup};
+use common::{cube, load, shared_meshes, soup_of, sphere, with_holes, Soup};
 use uvflat_core::charts::build_charts;
 use uvflat_core::mesh::PolyMesh;
 use uvflat_core::methods::{abf, mips, scaffold, slim};
@@ -198,6 +198,110 @@ fn every_island_keeps_the_rule_on_shared_meshes() {
     let Some(dir) = shared_meshes() else { return };
     for name in ["bunny.off", "3holes.off", "halftunnel.off", "camelhead.off", "cow.off"] {
         let s = load(&dir.join(name));
+        for method in methods() {
+            let r = unwrap(&s.input(), &UnwrapOptions { method: method.clone(), ..Default::default() }).unwrap();
+            check_rule(name, method.name(), &s, &[], &r);
+        }
+    }
+}
+
+/// The atlas's mean area distortion (3D-area-weighted over its islands, each measured against
+/// its own density by `metrics`) stays within the pipeline's limit on the closed shared meshes
+/// with `abf`: on 3holes, whose single island keeps the rule at 1.39 (the excess sits on the
+/// saddles between its handles, where cones do not help), the chart is split. A chart already
+/// within the limit is not split for it: fertility stays one island.
+#[test]
+fn the_mean_area_distortion_stays_within_its_limit_on_closed_shared_meshes() {
+    use uvflat_core::pipeline::repair::MEAN_AREA_LIMIT;
+    let Some(dir) = shared_meshes() else { return };
+    for name in ["3holes.off", "bunny.off", "cow.off", "fertility.off", "decimated-max.obj"] {
+        let s = load(&dir.join(name));
+        let r = unwrap(&s.input(), &UnwrapOptions { method: Method::Abf(Default::default()), ..Default::default() }).unwrap();
+        check_rule(name, "abf", &s, &[], &r);
+        let m = metrics::measure(&s.positions, &s.corner_verts, &s.face_sizes, &r.uv, None).unwrap();
+        let total: f64 = m.per_chart.iter().map(|c| c.area_3d).sum();
+        let mean: f64 = m.per_chart.iter().map(|c| c.area_3d * c.distortion.area).sum::<f64>() / total;
+        assert!(mean <= MEAN_AREA_LIMIT, "{name}: mean area distortion {mean:.4} over {} islands", m.charts);
+        if name == "fertility.off" {
+            assert_eq!(r.charts.len(), 1, "{name}: a chart within the limit was split");
+        }
+    }
+}
+
+/// Scans lose patches of surface: closed shared meshes with holes cut into them keep the rule
+/// with every method. Cuts that join a hole to the outline across nearly flat surface are
+/// not opened by most methods (their two sides cross), and linear conformal maps shrink
+/// regions their planned cones do not cover: a piece still broken after its repair is mapped by
+/// `scaffold`, reported as a fallback that names the method it replaces.
+#[test]
+fn meshes_with_holes_keep_the_rule_with_every_method() {
+    let Some(dir) = shared_meshes() else { return };
+    for (name, k, size, seed) in [("cow.off", 6, 60, 1), ("bunny.off", 3, 300, 2), ("decimated-max.obj", 5, 100, 3)] {
+        let s = with_holes(&load(&dir.join(name)), k, size, seed);
+        for method in methods() {
+            let r = unwrap(&s.input(), &UnwrapOptions { method: method.clone(), ..Default::default() }).unwrap();
+            check_rule(name, method.name(), &s, &[], &r);
+            for c in r.charts.iter().filter(|c| c.method == "scaffold" && method.name() != "scaffold") {
+                assert_eq!(c.status, ChartStatus::Fallback, "{name} / {}: chart {}", method.name(), c.id);
+                let why = c.reason.as_deref().unwrap_or("");
+                assert!(why.starts_with(method.name()) && why.contains("scaffold"), "{name} / {}: {why}", method.name());
+            }
+            eprintln!("{name} with holes / {}: {} islands, {} by scaffold", method.name(), r.charts.len(), r.charts.iter().filter(|c| c.method == "scaffold").count());
+        }
+    }
+}
+
+/// `s`'s triangles merged in pairs into quads, as a triangles-to-quads conversion does: each
+/// triangle not merged yet, in order, takes the first neighbour across its edges that is an
+/// unmerged triangle. Such meshes have vertices shared by only two faces (a quad and a
+/// triangle, or two quads) whose quads are folded across both diagonals.
+fn tris_to_quads(s: &Soup) -> Soup {
+    let tri = |f: usize| [s.corner_verts[3 * f], s.corner_verts[3 * f + 1], s.corner_verts[3 * f + 2]];
+    let n = s.face_sizes.len();
+    assert!(s.face_sizes.iter().all(|&k| k == 3));
+    let mut by_edge: std::collections::HashMap<(u32, u32), usize> = std::collections::HashMap::new();
+    for f in 0..n {
+        let t = tri(f);
+        for k in 0..3 {
+            by_edge.insert((t[k], t[(k + 1) % 3]), f);
+        }
+    }
+    let mut used = vec![false; n];
+    let mut faces: Vec<Vec<u32>> = Vec::new();
+    for f in 0..n {
+        if used[f] {
+            continue;
+        }
+        let t = tri(f);
+        let mut merged = false;
+        for k in 0..3 {
+            let (a, b, w) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
+            if let Some(&g) = by_edge.get(&(b, a)).filter(|&&g| g != f && !used[g]) {
+                let o = tri(g).into_iter().find(|&v| v != a && v != b).unwrap();
+                faces.push(vec![w, a, o, b]);
+                used[f] = true;
+                used[g] = true;
+                merged = true;
+                break;
+            }
+        }
+        if !merged {
+            used[f] = true;
+            faces.push(t.to_vec());
+        }
+    }
+    soup_of(s.positions.clone(), faces, |_| true)
+}
+
+/// Triangles merged into quads: no chart fails or folds where a vertex is shared by only two
+/// faces (each quad there is split through that vertex, whatever its shape), and the rule
+/// holds.
+#[test]
+fn triangles_merged_into_quads_keep_the_rule() {
+    let Some(dir) = shared_meshes() else { return };
+    for name in ["decimated-max.obj", "bunny.off", "cow.off"] {
+        let s = tris_to_quads(&load(&dir.join(name)));
+        assert!(s.face_sizes.iter().filter(|&&k| k == 4).count() * 3 > s.face_sizes.len(), "{name}: mostly quads");
         for method in [Method::Abf(Default::default()), Method::Slim(Default::default())] {
             let r = unwrap(&s.input(), &UnwrapOptions { method: method.clone(), ..Default::default() }).unwrap();
             check_rule(name, method.name(), &s, &[], &r);

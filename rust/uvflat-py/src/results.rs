@@ -189,7 +189,8 @@ impl PyUnwrapResult {
     /// ``repair_solve``, ``measure`` (seconds; the steps of different charts run in parallel,
     /// so ``plan_cuts``, ``solve`` and ``repair_solve`` are summed over threads), and the
     /// counts ``predicted_rounds`` (cones planned on a predicted flattening, nothing solved),
-    /// ``repair_rounds``, ``repair_pieces`` and ``splits``.
+    /// ``repair_rounds``, ``repair_pieces``, ``splits`` and ``last_resort`` (pieces mapped by
+    /// ``scaffold`` after their method's repair still broke the atlas rule).
     #[getter]
     fn phases<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let p = &self.phases;
@@ -203,6 +204,7 @@ impl PyUnwrapResult {
         d.set_item("repair_rounds", p.repair_rounds)?;
         d.set_item("repair_pieces", p.repair_pieces)?;
         d.set_item("splits", p.splits)?;
+        d.set_item("last_resort", p.last_resort)?;
         Ok(d)
     }
 

@@ -30,10 +30,11 @@ pub fn triangulate_polygon_avoiding(pts: &[[f64; 3]], taken: impl FnMut(usize, u
     triangulate_polygon_with(pts, taken, None)
 }
 
-/// [`triangulate_polygon_avoiding`] where a quad may be asked to split through one corner
-/// (`through`): used for a vertex shared by only two faces (a cone point with a small angle
-/// sum, as around a valence-2 vertex), which flattening opens up to a full turn — the other
-/// diagonal would leave a sliver with an angle near π there.
+/// [`triangulate_polygon_avoiding`] where a quad is split through one corner (`through`),
+/// always: used for a vertex shared by only two faces (a cone point with a small angle sum,
+/// as around a valence-2 vertex), which flattening opens up to a full turn — the other
+/// diagonal would leave a sliver with an angle near π there, and where both faces split away
+/// from the vertex they hold the same triangle twice (a fold).
 pub fn triangulate_polygon_with(
     pts: &[[f64; 3]],
     mut taken: impl FnMut(usize, usize) -> bool,
@@ -61,6 +62,13 @@ pub fn triangulate_polygon_with(
         return (1..n - 1).map(|i| [0, i, i + 1]).collect();
     };
 
+    if let (4, Some(k)) = (n, through) {
+        // A vertex shared by only two faces: when both split away from it they hold the same
+        // triangle (a fold) whatever the geometry says, and a non-planar quad there can make
+        // the mean-plane test below reject the split through it. The split through it is the
+        // surface's own fan around it.
+        return if k % 2 == 0 { vec![[0, 1, 2], [0, 2, 3]] } else { vec![[0, 1, 3], [1, 2, 3]] };
+    }
     if n == 4 {
         // Quads: pick the diagonal whose two triangles have the larger minimum angle (both
         // must be positively oriented), so a corner of ~180° never ends up in a sliver.
@@ -78,8 +86,7 @@ pub fn triangulate_polygon_with(
                 .iter()
                 .map(|t| min_angle_2d(p2[t[0]], p2[t[1]], p2[t[2]]))
                 .fold(f64::INFINITY, f64::min)
-                - if taken(d0, d1) { 10.0 } else { 0.0 }
-                - if through.is_some_and(|k| k != d0 && k != d1) { 5.0 } else { 0.0 };
+                - if taken(d0, d1) { 10.0 } else { 0.0 };
             if best.is_none_or(|(bq, _)| q > bq + 1e-9 * bq.abs() + 1e-300) {
                 best = Some((q, tris));
             }

@@ -459,6 +459,12 @@ impl Method {
         }
     }
 
+    /// Whether the method finds the island's outline itself (every method but Tutte, mean value
+    /// and harmonic, which map it onto a shape the user chose).
+    pub fn free_boundary(&self) -> bool {
+        !matches!(self, Method::Tutte { .. } | Method::MeanValue { .. } | Method::Harmonic { .. })
+    }
+
     /// Whether the method trades angle distortion for area distortion (ARAP, SLIM, MIPS,
     /// scaffold). The others (conformal maps and fixed-boundary maps) spread area at least
     /// about as much as the conformal flattening that keeps the outline's lengths, so that

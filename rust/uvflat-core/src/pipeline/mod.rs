@@ -23,10 +23,13 @@
 //!    at most 5% of the area outside `[1/s, s]` of the island's density).
 //! 5. Repair: [`repair::repair`] adds a cone at the worst region and re-cuts, then halves the
 //!    chart, each half taking the road again.
+//! 6. Last resort: [`last_resort::apply`] maps a piece that still breaks the rule after its
+//!    repair by `scaffold` (globally bijective), reported as a fallback.
 //!
 //! A new step is one file here; the outcome of every chart is a typed value
 //! ([`outcome::ChartStatus`], [`outcome::Problem`]).
 
+pub mod last_resort;
 pub mod outcome;
 pub mod phases;
 pub mod predict;

@@ -436,3 +436,47 @@ pub fn soup_of(positions: Vec<[f64; 3]>, faces: Vec<Vec<u32>>, keep: impl Fn([f6
     }
     out
 }
+
+/// `s` with `k` holes: each the first `size` faces met by a breadth-first walk over faces
+/// sharing an edge, from a face drawn by [`QuadRng`] seeded with `seed` (deterministic), the
+/// way scans lose patches of surface. Unused vertices are dropped.
+pub fn with_holes(s: &Soup, k: usize, size: usize, seed: u64) -> Soup {
+    let mut starts = Vec::with_capacity(s.face_sizes.len());
+    let mut at = 0usize;
+    for &n in &s.face_sizes {
+        starts.push(at);
+        at += n as usize;
+    }
+    let face = |f: usize| &s.corner_verts[starts[f]..starts[f] + s.face_sizes[f] as usize];
+    let mut by_edge: std::collections::HashMap<(u32, u32), Vec<usize>> = std::collections::HashMap::new();
+    for f in 0..s.face_sizes.len() {
+        let c = face(f);
+        for i in 0..c.len() {
+            let (a, b) = (c[i], c[(i + 1) % c.len()]);
+            by_edge.entry((a.min(b), a.max(b))).or_default().push(f);
+        }
+    }
+    let mut rng = QuadRng(seed.max(1));
+    let mut dead = vec![false; s.face_sizes.len()];
+    for _ in 0..k {
+        let f0 = ((rng.next() * s.face_sizes.len() as f64) as usize).min(s.face_sizes.len() - 1);
+        let mut queue = std::collections::VecDeque::from([f0]);
+        let mut taken = vec![f0];
+        dead[f0] = true;
+        while let Some(f) = queue.pop_front() {
+            let c = face(f);
+            for i in 0..c.len() {
+                let (a, b) = (c[i], c[(i + 1) % c.len()]);
+                for &g in &by_edge[&(a.min(b), a.max(b))] {
+                    if taken.len() < size && !dead[g] {
+                        dead[g] = true;
+                        taken.push(g);
+                        queue.push_back(g);
+                    }
+                }
+            }
+        }
+    }
+    let faces: Vec<Vec<u32>> = (0..s.face_sizes.len()).filter(|&f| !dead[f]).map(|f| face(f).to_vec()).collect();
+    soup_of(s.positions.clone(), faces, |_| true)
+}
