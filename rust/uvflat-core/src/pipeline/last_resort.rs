@@ -67,7 +67,7 @@ pub fn apply(ctx: &Context<'_, '_>, original: &Chart, pieces: &mut [Piece], trie
             continue;
         }
         let chart = piece.chart.as_ref().unwrap_or(original);
-        if chart.kind != ChartKind::Disk || pinned(ctx, chart) {
+        if chart.kind != ChartKind::Disk || super::pinned(ctx, chart) {
             continue;
         }
         let t = std::time::Instant::now();
@@ -103,7 +103,3 @@ pub fn apply(ctx: &Context<'_, '_>, original: &Chart, pieces: &mut [Piece], trie
     }
 }
 
-/// Whether any corner of `chart` is pinned.
-fn pinned(ctx: &Context<'_, '_>, chart: &Chart) -> bool {
-    !ctx.pins.is_empty() && chart.corner_vertex.iter().any(|(c, _)| ctx.pins.contains_key(c))
-}

@@ -163,6 +163,6 @@ fn road(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], depth: us
 }
 
 /// Whether any corner of `chart` is pinned.
-fn pinned(ctx: &Context<'_, '_>, chart: &Chart) -> bool {
+pub(crate) fn pinned(ctx: &Context<'_, '_>, chart: &Chart) -> bool {
     !ctx.pins.is_empty() && chart.corner_vertex.iter().any(|(c, _)| ctx.pins.contains_key(c))
 }

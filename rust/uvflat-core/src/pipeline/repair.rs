@@ -176,10 +176,6 @@ pub fn repair<'a>(
             break;
         }
     }
-    // A chart that keeps the rule but whose mean area distortion is above
-    // [`MEAN_AREA_LIMIT`] (cones no longer relieve it: typically saddles between handles) is
-    // split too; its halves replace it only when they keep the rule and lower the mean
-    // ([`lowers_mean_area`]).
     if !all_valid(ctx, &best)
         && ctx.options.method.balances_area()
         && chart.triangles.len() < super::last_resort::BEFORE_SPLIT_BELOW
@@ -189,6 +185,10 @@ pub fn repair<'a>(
         // the same kind of energy with the outline held apart, one island instead of a split.
         super::last_resort::apply(ctx, chart, &mut best, "its cones");
     }
+    // A chart that keeps the rule but whose mean area distortion is above
+    // [`MEAN_AREA_LIMIT`] (cones no longer relieve it: typically saddles between handles) is
+    // split too; its halves replace it only when they keep the rule and lower the mean
+    // ([`lowers_mean_area`]).
     let soft = all_valid(ctx, &best) && mean_area(&best) > MEAN_AREA_LIMIT;
     if (soft || !all_valid(ctx, &best)) && depth < cuts::MAX_SPLIT_DEPTH && chart.faces.len() >= 2 {
         // The spectral split; at the last split level, where the halves cannot be split again,
