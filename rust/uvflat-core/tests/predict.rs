@@ -90,4 +90,6 @@ fn the_planned_seams_do_not_depend_on_the_method() {
     assert!(!abf.is_empty());
     assert_eq!(abf, seams(Method::Lscm));
     assert_eq!(abf, seams(Method::Spectral(Default::default())));
+    // MIPS sees angles only: it is planned like the conformal methods.
+    assert_eq!(abf, seams(Method::Mips(Default::default())));
 }

@@ -189,8 +189,9 @@ impl PyUnwrapResult {
     /// ``repair_solve``, ``measure`` (seconds; the steps of different charts run in parallel,
     /// so ``plan_cuts``, ``solve`` and ``repair_solve`` are summed over threads), and the
     /// counts ``predicted_rounds`` (cones planned on a predicted flattening, nothing solved),
-    /// ``repair_rounds``, ``repair_pieces``, ``splits`` and ``last_resort`` (pieces mapped by
-    /// ``scaffold`` after their method's repair still broke the atlas rule).
+    /// ``repair_rounds``, ``repair_pieces``, ``splits`` and ``last_resort`` (solves of the last
+    /// resort, the method's flip-free kin then ``scaffold``, for pieces whose repair still broke
+    /// the atlas rule).
     #[getter]
     fn phases<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let p = &self.phases;

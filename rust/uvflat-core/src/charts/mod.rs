@@ -14,7 +14,7 @@ mod render;
 mod triangulate;
 
 pub use render::FaceTriangulation;
-pub use triangulate::{triangulate_polygon, triangulate_polygon_avoiding, triangulate_polygon_with};
+pub use triangulate::{convex_quad, triangulate_polygon, triangulate_polygon_avoiding, triangulate_polygon_with};
 
 use std::collections::{HashMap, HashSet};
 
@@ -63,8 +63,9 @@ pub struct Chart {
     /// The chart's quad faces: a quad is flip-free only if it is strictly convex in UV, i.e.
     /// positive on both of its diagonal splits (exporters and engines pick their own). Quads
     /// with a corner at a vertex inside the chart shared by only two faces are left out (one
-    /// of its two corner angles is at least π, so convexity is impossible): they count as
-    /// their own two triangles, like n-gons.
+    /// of its two corner angles is at least π, so convexity is impossible), and so are quads
+    /// not clearly convex in 3D ([`convex_quad`]: a concave or folded quad has a
+    /// split turned over on the surface itself): they count as their own two triangles.
     pub quads: Vec<Quad>,
     /// Render triangles (the given triangulation) of the n-gons of five or more corners that
     /// keep the core's own split because a render diagonal is already an edge of the chart:
@@ -576,7 +577,12 @@ fn make_chart(
             let n = triangles.len() as u32;
             polygons.push(Polygon { vertices: local.to_vec(), triangles: n..n + (m - 2) as u32 });
         }
-        if m == 4 && tris.len() == 2 && !two_face {
+        // Quads not clearly convex in 3D keep only their own split too (see `convex_quad`).
+        if m == 4
+            && tris.len() == 2
+            && !two_face
+            && convex_quad(&[poly_pts[0], poly_pts[1], poly_pts[2], poly_pts[3]])
+        {
             let n = triangles.len() as u32;
             quads.push(Quad { vertices: [local[0], local[1], local[2], local[3]], triangles: [n, n + 1] });
         }

@@ -98,6 +98,34 @@ pub fn triangulate_polygon_with(
     ear_clip(&p2, &mut taken)
 }
 
+/// Smallest share of a quad's area (in its Newell plane) that each of the four triangles of
+/// its two diagonal splits must hold for [`convex_quad`]: about a corner of 177° on a square.
+pub const CONVEX_QUAD_MARGIN: f64 = 0.02;
+
+/// Whether a quad is clearly convex in 3D: every triangle of both of its diagonal splits,
+/// projected onto the quad's Newell plane, is positive and holds at least
+/// [`CONVEX_QUAD_MARGIN`] of the quad's projected area. Only such quads are asked to stay
+/// strictly convex in UV ([`crate::charts::Chart::quads`]): a quad that is concave (or nearly
+/// so, or folded) in 3D has one split with a triangle turned over on the surface itself; its
+/// faithful map keeps that shape, and keeping both splits positive in UV would distort it
+/// (Blender splits such a quad along its inner diagonal, the one positive on the surface).
+pub fn convex_quad(pts: &[[f64; 3]; 4]) -> bool {
+    let nrm = crate::geometry::newell_normal(4, |i| pts[i]);
+    let twice_area = norm(nrm);
+    if !(twice_area > 0.0) {
+        return false;
+    }
+    let signed = |a: usize, b: usize, c: usize| {
+        let (pa, pb, pc) = (pts[a], pts[b], pts[c]);
+        let e1 = [pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]];
+        let e2 = [pc[0] - pa[0], pc[1] - pa[1], pc[2] - pa[2]];
+        dot(cross(e1, e2), nrm) / twice_area
+    };
+    [(0, 1, 2), (0, 2, 3), (0, 1, 3), (1, 2, 3)]
+        .iter()
+        .all(|&(a, b, c)| signed(a, b, c) >= CONVEX_QUAD_MARGIN * twice_area)
+}
+
 /// Quantum of the ear quality (radians): ears whose qualities round to the same multiple are
 /// tied, and a tie goes to the smaller corner index, so the choice does not depend on
 /// round-off (rectangles, regular polygons) or on where the polygon lies.
@@ -414,6 +442,33 @@ mod tests {
         let b = p[t[1]];
         let c = p[t[2]];
         (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+    }
+
+    #[test]
+    fn convex_quad_tells_clearly_convex_quads_from_concave_folded_and_flat_cornered_ones() {
+        let square = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+        assert!(convex_quad(&square));
+        // Winding does not matter (the Newell normal turns with it).
+        let mut reversed = square;
+        reversed.reverse();
+        assert!(convex_quad(&reversed));
+        // A dart: corner 2 pushed inside, concave.
+        let dart = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.3, 0.3, 0.0], [0.0, 1.0, 0.0]];
+        assert!(!convex_quad(&dart));
+        // Corner 2 on the diagonal's far side but nearly on the line 1-3: a corner of ~179°.
+        let flat = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.505, 0.505, 0.0], [0.0, 1.0, 0.0]];
+        assert!(!convex_quad(&flat));
+        // Clearly convex but not planar (two corners lifted: bent along a diagonal): convex.
+        let h = 0.5f64 * (30.0f64.to_radians()).tan() * std::f64::consts::FRAC_1_SQRT_2;
+        let bent = [[0.0, 0.0, 0.0], [1.0, 0.0, h], [1.0, 1.0, 0.0], [0.0, 1.0, h]];
+        assert!(convex_quad(&bent));
+        // Folded onto itself along the diagonal 0-2 (corner 3 brought over to corner 1's
+        // side, lifted): the split along 1-3 holds a triangle turned over.
+        let folded = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.8, 0.2, 0.3]];
+        assert!(!convex_quad(&folded));
+        // Degenerate (all corners on a line).
+        let line = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0], [3.0, 0.0, 0.0]];
+        assert!(!convex_quad(&line));
     }
 
     #[test]

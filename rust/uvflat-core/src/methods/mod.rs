@@ -376,6 +376,36 @@ pub fn barrier_triangles(chart: &Chart, uv: &[[f64; 2]]) -> (Vec<[u32; 3]>, Vec<
     (tris, weights, left_out)
 }
 
+/// Post-check of a linear method with no barrier at all (LSCM, spectral, ARAP): when every
+/// triangle of `sol` is positive but some quads are not strictly convex,
+/// [`quad_repair::repair_quads`] moves the few vertices involved (never flipping anything;
+/// pinned vertices stay) and the note says how many. A map with flipped triangles is left
+/// as it is (the pipeline repairs or reports it).
+pub fn convex_quads(chart: &Chart, pins: &[(u32, [f64; 2])], mut sol: ChartSolution, method: &str) -> ChartSolution {
+    let bad = nonconvex_quads(chart, &sol.uv);
+    if bad == 0 || sol.fallback.is_some() {
+        return sol;
+    }
+    let mut fixed = vec![false; chart.positions.len()];
+    for &(v, _) in pins {
+        fixed[v as usize] = true;
+    }
+    let mut uv = sol.uv.clone();
+    let (left, moved) = quad_repair::repair_quads(chart, &mut uv, &fixed);
+    if left < bad && moved > 0 {
+        sol.uv = uv;
+        let note = format!(
+            "{} of {bad} quad(s) non-convex after {method} made strictly convex by moving {moved} vertex(es)",
+            bad - left
+        );
+        sol.note = Some(match sol.note.take() {
+            Some(n) => format!("{n}; {note}"),
+            None => note,
+        });
+    }
+    sol
+}
+
 /// Post-check of a method that promises no flips but has no barrier for quads (ABF: its
 /// angles are per triangle, so a quad's corner may exceed π): if `sol` leaves a quad of the
 /// chart non-convex, first [`quad_repair::repair_quads`] moves the few vertices involved
@@ -465,12 +495,13 @@ impl Method {
         !matches!(self, Method::Tutte { .. } | Method::MeanValue { .. } | Method::Harmonic { .. })
     }
 
-    /// Whether the method trades angle distortion for area distortion (ARAP, SLIM, MIPS,
-    /// scaffold). The others (conformal maps and fixed-boundary maps) spread area at least
-    /// about as much as the conformal flattening that keeps the outline's lengths, so that
-    /// flattening predicts when they break Max Stretch ([`crate::pipeline::triage`]).
+    /// Whether the method trades angle distortion for area distortion (ARAP, SLIM, scaffold).
+    /// The others (conformal maps, MIPS among them: its energy σ1/σ2 + σ2/σ1 sees angles only,
+    /// and fixed-boundary maps) spread area at least about as much as the conformal
+    /// flattening that keeps the outline's lengths, so that flattening predicts when they
+    /// break Max Stretch ([`crate::pipeline::triage`]).
     pub fn balances_area(&self) -> bool {
-        matches!(self, Method::Arap(_) | Method::Slim(_) | Method::Mips(_) | Method::Scaffold(_))
+        matches!(self, Method::Arap(_) | Method::Slim(_) | Method::Scaffold(_))
     }
 }
 
@@ -491,8 +522,10 @@ fn dispatch(method: &Method, chart: &Chart, pins: &[(u32, [f64; 2])]) -> std::re
         Method::Tutte { boundary } => tutte::solve(chart, pins, *boundary),
         Method::Harmonic { boundary } => harmonic::solve(chart, pins, *boundary),
         Method::MeanValue { boundary } => mean_value::solve(chart, pins, *boundary),
-        Method::Lscm => lscm::solve(chart, pins),
-        Method::Spectral(o) => spectral::solve(chart, pins, o),
+        Method::Lscm => lscm::solve(chart, pins).map(|sol| convex_quads(chart, pins, sol, "LSCM")),
+        Method::Spectral(o) => {
+            spectral::solve(chart, pins, o).map(|sol| convex_quads(chart, pins, sol, "the spectral map"))
+        }
         Method::Abf(o) => abf::solve(chart, pins, o).and_then(|sol| {
             // A convex outline stays put: its vertices do not move (holes' may).
             let mut fixed = Vec::new();
@@ -504,7 +537,7 @@ fn dispatch(method: &Method, chart: &Chart, pins: &[(u32, [f64; 2])]) -> std::re
             }
             convex_quads_or_slim(chart, pins, sol, "ABF", fixed)
         }),
-        Method::Arap(o) => arap::solve(chart, pins, o),
+        Method::Arap(o) => arap::solve(chart, pins, o).map(|sol| convex_quads(chart, pins, sol, "ARAP")),
         Method::Slim(o) => slim::solve(chart, pins, o),
         Method::Mips(o) => mips::solve(chart, pins, o),
         Method::Scaffold(o) => scaffold::solve(chart, pins, o),

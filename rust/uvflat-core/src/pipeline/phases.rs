@@ -27,8 +27,9 @@ pub struct Phases {
     pub predicted_rounds: usize,
     /// Charts halved by the last-resort split.
     pub splits: usize,
-    /// Pieces that still broke the rule after repair and were mapped by `scaffold` instead
-    /// ([`crate::pipeline::last_resort`]; each also counted in `repair_pieces`).
+    /// Solves of the last resort for pieces that still broke the rule after repair: the
+    /// method's flip-free kin, then `scaffold` ([`crate::pipeline::last_resort`]; each also
+    /// counted in `repair_pieces`).
     pub last_resort: usize,
     /// Per-face quality of the result (wall clock).
     pub measure: f64,
