@@ -28,6 +28,7 @@ import addon_utils  # noqa: E402
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO / "blender_scripts"))
 import common  # noqa: E402
+from test_triangulation import convex_in_3d  # noqa: E402
 
 SHARED = REPO.parent / "shared" / "meshes"
 SHARED_MESHES = ("camelhead.off", "lion.off", "beetle.off", "halftunnel.off")
@@ -1522,22 +1523,6 @@ def test_phase_timings_cover_the_run(ext, scene, pack):
 PROMISING = ["tutte", "mean_value", "slim", "mips", "scaffold", "abf"]
 
 
-def convex_in_3d(positions, corner_verts, face_sizes, margin=0.02):
-    """Per face: a quad whose four split triangles, seen along its Newell normal, each hold at
-    least ``margin`` of its area (the quads the core keeps strictly convex in UV)."""
-    fs = np.asarray(face_sizes)
-    starts = np.concatenate([[0], np.cumsum(fs)[:-1]])
-    out = np.zeros(len(fs), dtype=bool)
-    q = np.flatnonzero(fs == 4)
-    p = [np.asarray(positions, float)[np.asarray(corner_verts)[starts[q] + k]] for k in range(4)]
-    newell = sum(np.cross(p[k], p[(k + 1) % 4]) for k in range(4))  # twice the projected area
-    twice = np.linalg.norm(newell, axis=1)
-    signed = [np.einsum("ij,ij->i", np.cross(p[b] - p[a], p[d] - p[a]), newell) / np.maximum(twice, 1e-300)
-              for a, b, d in [(0, 1, 2), (0, 2, 3), (0, 1, 3), (1, 2, 3)]]
-    out[q] = np.all([x >= margin * twice for x in signed], axis=0) & (twice > 0)
-    return out
-
-
 def blender_folds(ext, obj, result):
     """(flipped loop triangles, non-convex quads) of ``obj``'s UVs, measured here from
     Blender's own ``loop_triangles`` and both diagonals of every quad, each chart with the
@@ -1591,7 +1576,7 @@ def blender_folds(ext, obj, result):
     face_sign[poly] = sign
     # Quads: both splits, for quads convex in 3D (a concave or folded quad's faithful map keeps
     # its shape: one split is turned over on the surface itself).
-    q = np.flatnonzero((fs == 4) & solved & ~exempt & convex_in_3d(data.positions, cv, fs))
+    q = np.flatnonzero((fs == 4) & solved & ~exempt & convex_in_3d(data.positions, cv, fs, margin=0.02))
     c = [starts[q] + k for k in range(4)]
     s = face_sign[q]
     splits = [(0, 1, 2), (0, 2, 3), (0, 1, 3), (1, 2, 3)]

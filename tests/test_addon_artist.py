@@ -163,7 +163,7 @@ def test_select_flipped_selects_the_faces_the_report_counts(ext, scene):
     np.logical_or.at(folded, tri_face, area * sign[chart[tri_face]] <= 0)
     fs = data.face_sizes
     starts = np.concatenate([[0], np.cumsum(fs)[:-1]])
-    q = np.flatnonzero((fs == 4) & convex_in_3d(data.positions, data.corner_verts, fs))
+    q = np.flatnonzero((fs == 4) & convex_in_3d(data.positions, data.corner_verts, fs, margin=0.02))
     c = [starts[q] + k for k in range(4)]
     s = sign[chart[q]]
     for a, b, d in ((0, 1, 2), (0, 2, 3), (0, 1, 3), (1, 2, 3)):

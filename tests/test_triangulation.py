@@ -46,9 +46,10 @@ def curved_quad_grid(n, seed):
 
 
 def convex_in_3d(positions, corner_verts, face_sizes, margin=0.05):
-    """Per face: a quad whose four split triangles, seen along the sum of their normals, each
-    hold at least ``margin`` of its area (written here apart from the core's own test, which
-    asks 2%: every quad this accepts is one the methods must keep convex)."""
+    """Per face: a quad whose four split triangles, seen along the sum of their normals (its
+    Newell normal), each hold at least ``margin`` of its area. Written here apart from the
+    core's own test (``charts::convex_quad``), which asks 2%: with the default 5%, every quad
+    this accepts is one the methods must keep convex; with 2%, exactly the core's quads."""
     fs = np.asarray(face_sizes)
     starts = np.concatenate([[0], np.cumsum(fs)[:-1]])
     out = np.zeros(len(fs), dtype=bool)

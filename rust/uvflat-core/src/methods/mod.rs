@@ -376,40 +376,56 @@ pub fn barrier_triangles(chart: &Chart, uv: &[[f64; 2]]) -> (Vec<[u32; 3]>, Vec<
     (tris, weights, left_out)
 }
 
-/// Post-check of a linear method with no barrier at all (LSCM, spectral, ARAP): when every
-/// triangle of `sol` is positive but some quads are not strictly convex,
-/// [`quad_repair::repair_quads`] moves the few vertices involved (never flipping anything;
-/// pinned vertices stay) and the note says how many. A map with flipped triangles is left
-/// as it is (the pipeline repairs or reports it).
-pub fn convex_quads(chart: &Chart, pins: &[(u32, [f64; 2])], mut sol: ChartSolution, method: &str) -> ChartSolution {
+/// Make the non-convex quads of `sol` (a map of `chart` by `method`) strictly convex in place
+/// with [`quad_repair::repair_quads`], which moves the few vertices involved and never flips
+/// anything; `fixed` vertices (may be empty) and pinned ones stay. The repair is kept when it
+/// fixed some quad, and the note says how many. Returns the quads still not strictly convex.
+fn make_quads_convex(
+    chart: &Chart,
+    pins: &[(u32, [f64; 2])],
+    sol: &mut ChartSolution,
+    method: &str,
+    mut fixed: Vec<bool>,
+) -> usize {
     let bad = nonconvex_quads(chart, &sol.uv);
-    if bad == 0 || sol.fallback.is_some() {
-        return sol;
+    if bad == 0 {
+        return 0;
     }
-    let mut fixed = vec![false; chart.positions.len()];
-    for &(v, _) in pins {
-        fixed[v as usize] = true;
+    if !pins.is_empty() {
+        fixed.resize(chart.positions.len(), false);
+        for &(v, _) in pins {
+            fixed[v as usize] = true;
+        }
     }
     let mut uv = sol.uv.clone();
     let (left, moved) = quad_repair::repair_quads(chart, &mut uv, &fixed);
     if left < bad && moved > 0 {
         sol.uv = uv;
-        let note = format!(
-            "{} of {bad} quad(s) non-convex after {method} made strictly convex by moving {moved} vertex(es)",
-            bad - left
-        );
+        let done = if left == 0 { format!("{bad}") } else { format!("{} of {bad}", bad - left) };
+        let note = format!("{done} quad(s) non-convex after {method} made strictly convex by moving {moved} vertex(es)");
         sol.note = Some(match sol.note.take() {
             Some(n) => format!("{n}; {note}"),
             None => note,
         });
+        return left;
+    }
+    bad
+}
+
+/// Post-check of a linear method with no barrier at all (LSCM, spectral, ARAP): its
+/// non-convex quads are made convex in place where the repair can ([`make_quads_convex`]; it
+/// needs every triangle positive). What is left is the pipeline's to repair or report.
+pub fn convex_quads(chart: &Chart, pins: &[(u32, [f64; 2])], mut sol: ChartSolution, method: &str) -> ChartSolution {
+    if sol.fallback.is_none() {
+        make_quads_convex(chart, pins, &mut sol, method, Vec::new());
     }
     sol
 }
 
 /// Post-check of a method that promises no flips but has no barrier for quads (ABF: its
 /// angles are per triangle, so a quad's corner may exceed π): if `sol` leaves a quad of the
-/// chart non-convex, first [`quad_repair::repair_quads`] moves the few vertices involved
-/// (never flipping anything; pinned vertices and `fixed` ones stay) and the note says so;
+/// chart non-convex, first [`make_quads_convex`] moves the few vertices involved (never
+/// flipping anything; pinned vertices and `fixed` ones stay) and the note says so;
 /// if quads are still not convex, the chart is re-solved by SLIM, whose barrier covers both
 /// diagonal splits of every quad and whose start (the mean value map on the polygon graph)
 /// has convex quads; the report marks it as a fallback and says why. A solution that already
@@ -420,31 +436,18 @@ pub fn convex_quads_or_slim(
     pins: &[(u32, [f64; 2])],
     mut sol: ChartSolution,
     method: &str,
-    mut fixed: Vec<bool>,
+    fixed: Vec<bool>,
 ) -> std::result::Result<ChartSolution, ChartFailure> {
-    let bad = nonconvex_quads(chart, &sol.uv);
-    if bad == 0 || sol.fallback.is_some() {
+    if sol.fallback.is_some() {
         return Ok(sol);
     }
-    if !pins.is_empty() {
-        fixed.resize(chart.positions.len(), false);
-        for &(v, _) in pins {
-            fixed[v as usize] = true;
-        }
-    }
-    let mut repaired_uv = sol.uv.clone();
-    let (left, moved) = quad_repair::repair_quads(chart, &mut repaired_uv, &fixed);
+    let bad = nonconvex_quads(chart, &sol.uv);
+    let left = make_quads_convex(chart, pins, &mut sol, method, fixed);
     if left == 0 {
-        sol.uv = repaired_uv;
-        let note = format!("{bad} quad(s) non-convex after {method} made strictly convex by moving {moved} vertex(es)");
-        sol.note = Some(match sol.note.take() {
-            Some(n) => format!("{n}; {note}"),
-            None => note,
-        });
         return Ok(sol);
     }
     let repaired = match slim::solve(chart, pins, &slim::SlimOptions::default()) {
-        Ok(r) if r.fallback.is_none() && nonconvex_quads(chart, &r.uv) < bad => r,
+        Ok(r) if r.fallback.is_none() && nonconvex_quads(chart, &r.uv) < left => r,
         _ => return Ok(sol),
     };
     let mut out = repaired;

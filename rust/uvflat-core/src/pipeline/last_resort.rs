@@ -102,6 +102,11 @@ pub fn apply(ctx: &Context<'_, '_>, original: &Chart, pieces: &mut [Piece], trie
         for method in candidates {
             let t = std::time::Instant::now();
             let name = method.name();
+            let what = if matches!(method, Method::Scaffold(_)) {
+                "is globally bijective"
+            } else {
+                "never flips a triangle"
+            };
             let options = crate::unwrap::UnwrapOptions { method, ..ctx.options.clone() };
             let (report, uv, face_flips) = solve_chart(chart, ctx.pins, &options, &ctx.rule);
             ctx.clock.add(|p| {
@@ -116,12 +121,12 @@ pub fn apply(ctx: &Context<'_, '_>, original: &Chart, pieces: &mut [Piece], trie
             }
             least = badness;
             let keeps = report.status != ChartStatus::Invalid;
-            found = Some((name, report, uv, face_flips));
+            found = Some((name, what, report, uv, face_flips));
             if keeps {
                 break;
             }
         }
-        let Some((name, mut report, uv, face_flips)) = found else {
+        let Some((name, what, mut report, uv, face_flips)) = found else {
             continue;
         };
         let why = piece.report.reason.clone().unwrap_or_default();
@@ -130,7 +135,7 @@ pub fn apply(ctx: &Context<'_, '_>, original: &Chart, pieces: &mut [Piece], trie
             "{} broke the atlas rule after {tried} ({why}); {}, which {}, was used instead{}",
             ctx.options.method.name(),
             name,
-            if name == "scaffold" { "is globally bijective" } else { "never flips a triangle" },
+            what,
             own.map(|r| format!(": {r}")).unwrap_or_default()
         ));
         if report.status != ChartStatus::Invalid {

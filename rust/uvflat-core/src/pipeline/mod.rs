@@ -24,7 +24,8 @@
 //! 5. Repair: [`repair::repair`] adds a cone at the worst region and re-cuts, then halves the
 //!    chart, each half taking the road again.
 //! 6. Last resort: [`last_resort::apply`] maps a piece that still breaks the rule after its
-//!    repair by `scaffold` (globally bijective), reported as a fallback.
+//!    repair by the method's flip-free kin or by `scaffold` (globally bijective), reported as
+//!    a fallback.
 //!
 //! A new step is one file here; the outcome of every chart is a typed value
 //! ([`outcome::ChartStatus`], [`outcome::Problem`]).

@@ -24,10 +24,10 @@
 //! where cones do not relieve it, such as the saddles between handles) is split the same way;
 //! its halves replace it only when they keep the rule and take the mean down by
 //! [`MEAN_AREA_GAIN`]. Disks solved as they are that keep the rule are not split for it.
-//! Pieces that still break the rule when every split level has had its try are mapped by
-//! `scaffold` ([`super::last_resort`]); under an area-balancing method (SLIM, ARAP, MIPS) an outline
-//! that crosses itself is handed to it before the split, on charts below
-//! [`super::last_resort::BEFORE_SPLIT_BELOW`] triangles.
+//! Pieces that still break the rule when every split level has had its try are mapped by the
+//! method's flip-free kin or `scaffold` ([`super::last_resort`]); under an area-balancing
+//! method (SLIM, ARAP, scaffold) an outline that crosses itself is handed to `scaffold` before
+//! the split, on charts below [`super::last_resort::BEFORE_SPLIT_BELOW`] triangles.
 //!
 //! Bounded: at most `1 + REPAIR_ROUNDS` solves per chart and level, `MAX_SPLIT_DEPTH` levels.
 //! `Phases` counts them (`benchmark.py --phases`).
@@ -80,7 +80,7 @@ pub fn repair<'a>(
     let mut single = false;
     // The cones planned on the prediction ([`super::predict`]); when the prediction could not
     // keep the rule, more cones will not either: one solve of the best plan, then the split.
-    // Methods that balance area (SLIM, ARAP, MIPS, scaffold) often keep the rule where the
+    // Methods that balance area (SLIM, ARAP, scaffold) often keep the rule where the
     // conformal prediction breaks it: they start from the cutter's cones as they are.
     let (rounds, mut planned) = if ctx.options.method.balances_area() {
         (cuts::REPAIR_ROUNDS, None)
