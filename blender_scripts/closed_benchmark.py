@@ -520,7 +520,8 @@ def phase_line(uvflat, name, method, positions, corner_verts, face_sizes, xatlas
             f"plan cuts {p['plan_cuts']:.3f} s ({p.get('predicted_rounds', 0)} predicted rounds), "
             f"first solves {p['solve']:.3f} s, repair solves "
             f"{p['repair_solve']:.3f} s ({p['repair_rounds']} rounds, {p['repair_pieces']} pieces, "
-            f"{p['splits']} splits, {p.get('last_resort', 0)} last-resort solves), measure {p['measure']:.3f} s; whole call {seconds:.3f} s"
+            f"{p['splits']} splits ({p.get('predicted_splits', 0)} before any solve), {p.get('peels', 0)} peels, "
+            f"{p.get('last_resort', 0)} last-resort solves), measure {p['measure']:.3f} s; whole call {seconds:.3f} s"
             f"{ratio}, {len(r.charts)} islands")
 
 

@@ -138,7 +138,8 @@ def main(argv=None):
                               f"({p.get('predicted_rounds', 0)} predicted rounds), first solves "
                               f"{p['solve']:.2f} s, repair solves {p['repair_solve']:.2f} s "
                               f"({p['repair_rounds']} rounds, {p['repair_pieces']} pieces, "
-                              f"{p['splits']} splits, {p.get('last_resort', 0)} last-resort solves)")
+                              f"{p['splits']} splits ({p.get('predicted_splits', 0)} before any solve), "
+                              f"{p.get('peels', 0)} peels, {p.get('last_resort', 0)} last-resort solves)")
         print("\n".join(lines[-len(rows):]), flush=True)
     text = "\n".join(lines) + "\n\n" + "\n".join(phases) + "\n"
     print()

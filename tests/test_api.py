@@ -1461,7 +1461,8 @@ def test_phases_account_for_the_pipeline():
     r = uvflat.unwrap(pos, cv, fs, method="abf")
     p = r.phases
     assert set(p) == {"build_charts", "plan_cuts", "solve", "repair_solve", "measure",
-                      "predicted_rounds", "repair_rounds", "repair_pieces", "splits", "last_resort"}
+                      "predicted_rounds", "repair_rounds", "repair_pieces", "splits", "predicted_splits",
+                      "peels", "last_resort"}
     assert all(v >= 0 for v in p.values())
     # Every piece of the cube keeps the rule with ABF: nothing handed to scaffold.
     assert p["last_resort"] == 0 and all(c.method == "abf" for c in r.charts)

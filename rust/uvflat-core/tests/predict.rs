@@ -93,3 +93,36 @@ fn the_planned_seams_do_not_depend_on_the_method() {
     // MIPS sees angles only: it is planned like the conformal methods.
     assert_eq!(abf, seams(Method::Mips(Default::default())));
 }
+
+#[test]
+fn a_plan_predicted_above_the_mean_limit_is_split_before_any_solve() {
+    // The bunny, closed: its best plan keeps the rule with a predicted mean area distortion
+    // above the limit (ABF's map of it too), so the split comes first and the halves, which
+    // keep the rule with a lower mean, are the result.
+    let Some(dir) = common::shared_meshes() else { return };
+    let s = common::load(&dir.join("bunny.off"));
+    let r = unwrap(&s.input(), &UnwrapOptions { method: Method::Abf(abf::AbfOptions::default()), ..Default::default() }).unwrap();
+    assert!(r.phases.predicted_splits >= 1, "{:?}", r.phases);
+    assert!(r.phases.splits >= r.phases.predicted_splits);
+    assert!(r.charts.len() >= 2);
+    let options = UnwrapOptions::default();
+    let rule = uvflat_core::pipeline::rule::AtlasRule { max_stretch: options.auto_seams.max_stretch, full: true };
+    for c in &r.charts {
+        assert_eq!(c.status.name(), "solved");
+        assert!(rule.broken(c).is_none(), "chart {} breaks the rule: {:?}", c.id, rule.broken(c));
+    }
+    // The islands' mean area distortion, weighted by their 3D area: within the limit the
+    // split is for.
+    let mut area = vec![0.0; r.charts.len()];
+    for (f, &c) in r.face_chart.iter().enumerate() {
+        let corner = |k: usize| s.positions[s.corner_verts[3 * f + k] as usize];
+        assert_eq!(s.face_sizes[f], 3);
+        area[c as usize] += uvflat_core::geometry::triangle_area([corner(0), corner(1), corner(2)]);
+    }
+    let total: f64 = area.iter().sum();
+    let mean: f64 = r.charts.iter().zip(&area).map(|(c, a)| a * c.distortion.area).sum::<f64>() / total;
+    assert!(mean <= uvflat_core::pipeline::repair::MEAN_AREA_LIMIT, "mean area {mean:.3}");
+    // SLIM balances area and plans no prediction: nothing is split before its solve.
+    let slim = unwrap(&s.input(), &UnwrapOptions { method: Method::Slim(slim::SlimOptions::default()), ..Default::default() }).unwrap();
+    assert_eq!(slim.phases.predicted_splits, 0);
+}

@@ -189,7 +189,10 @@ impl PyUnwrapResult {
     /// ``repair_solve``, ``measure`` (seconds; the steps of different charts run in parallel,
     /// so ``plan_cuts``, ``solve`` and ``repair_solve`` are summed over threads), and the
     /// counts ``predicted_rounds`` (cones planned on a predicted flattening, nothing solved),
-    /// ``repair_rounds``, ``repair_pieces``, ``splits`` and ``last_resort`` (solves of the last
+    /// ``repair_rounds``, ``repair_pieces``, ``splits``, ``predicted_splits`` (splits made
+    /// before any solve, the chart's predicted mean area distortion being too high),
+    /// ``peels`` (large pieces whose outline crossed itself, made valid by making the faces
+    /// there islands of their own) and ``last_resort`` (solves of the last
     /// resort, the method's flip-free kin then ``scaffold``, for pieces whose repair still broke
     /// the atlas rule).
     #[getter]
@@ -205,6 +208,8 @@ impl PyUnwrapResult {
         d.set_item("repair_rounds", p.repair_rounds)?;
         d.set_item("repair_pieces", p.repair_pieces)?;
         d.set_item("splits", p.splits)?;
+        d.set_item("predicted_splits", p.predicted_splits)?;
+        d.set_item("peels", p.peels)?;
         d.set_item("last_resort", p.last_resort)?;
         Ok(d)
     }

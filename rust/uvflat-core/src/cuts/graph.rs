@@ -34,16 +34,23 @@ pub struct ChartGraph {
     pub adj: Vec<(u32, u32)>,
 }
 
+/// The faces of `chart` (polygons of `mesh`) as polygons over chart vertices, in the chart's
+/// face order.
+pub fn face_polygons(mesh: &PolyMesh<'_>, chart: &Chart) -> Vec<Vec<u32>> {
+    let mut polygons = Vec::with_capacity(chart.faces.len());
+    let mut at = 0usize;
+    for &f in &chart.faces {
+        let m = mesh.face_corners(f as usize).len();
+        polygons.push(chart.corner_vertex[at..at + m].iter().map(|&(_, v)| v).collect::<Vec<u32>>());
+        at += m;
+    }
+    polygons
+}
+
 impl ChartGraph {
     /// Build the graph of `chart`, whose faces are polygons of `mesh`.
     pub fn new(mesh: &PolyMesh<'_>, chart: &Chart) -> ChartGraph {
-        let mut polygons = Vec::with_capacity(chart.faces.len());
-        let mut at = 0usize;
-        for &f in &chart.faces {
-            let m = mesh.face_corners(f as usize).len();
-            polygons.push(chart.corner_vertex[at..at + m].iter().map(|&(_, v)| v).collect::<Vec<u32>>());
-            at += m;
-        }
+        let polygons = face_polygons(mesh, chart);
         let normals: Vec<[f64; 3]> = polygons
             .iter()
             .map(|poly| {

@@ -446,6 +446,19 @@ pub fn boundary_self_overlap(uv: &[[f64; 2]], loops: &[Vec<u32>]) -> bool {
 /// [`boundary_self_overlap`], testing every pair of segments when there are at most
 /// `brute_force` of them and through a uniform grid otherwise.
 fn self_overlap_with(uv: &[[f64; 2]], loops: &[Vec<u32>], brute_force: usize) -> bool {
+    !boundary_crossings_with(uv, loops, brute_force, 1).is_empty()
+}
+
+/// The pairs of outline segments (each as its two chart vertices, in loop order) that cross
+/// or touch, as [`boundary_self_overlap`] finds them, up to `limit` pairs (sorted, so the
+/// same whatever the grid's order). An outline collapsed onto one point gives one pair of its
+/// first segments.
+pub fn boundary_crossings(uv: &[[f64; 2]], loops: &[Vec<u32>], limit: usize) -> Vec<[[u32; 2]; 2]> {
+    boundary_crossings_with(uv, loops, BRUTE_FORCE_SEGMENTS, limit)
+}
+
+/// [`boundary_crossings`] with the brute-force threshold of [`self_overlap_with`].
+fn boundary_crossings_with(uv: &[[f64; 2]], loops: &[Vec<u32>], brute_force: usize, limit: usize) -> Vec<[[u32; 2]; 2]> {
     let mut segs: Vec<(u32, u32)> = Vec::new();
     for lp in loops {
         for i in 0..lp.len() {
@@ -453,9 +466,10 @@ fn self_overlap_with(uv: &[[f64; 2]], loops: &[Vec<u32>], brute_force: usize) ->
         }
     }
     let n = segs.len();
-    if n < 2 {
-        return false;
+    if n < 2 || limit == 0 {
+        return Vec::new();
     }
+    let pair = |i: usize, j: usize| [[segs[i].0, segs[i].1], [segs[j].0, segs[j].1]];
     let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
     let mut total_len = 0.0;
     for &(a, b) in &segs {
@@ -468,7 +482,7 @@ fn self_overlap_with(uv: &[[f64; 2]], loops: &[Vec<u32>], brute_force: usize) ->
     }
     let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]);
     if !(extent > 0.0) {
-        return true; // everything collapsed onto one point
+        return vec![pair(0, 1)]; // everything collapsed onto one point
     }
     // Whether segments i and j overlap (consecutive ones only if they fold back).
     let crossing = |i: usize, j: usize| -> bool {
@@ -495,8 +509,19 @@ fn self_overlap_with(uv: &[[f64; 2]], loops: &[Vec<u32>], brute_force: usize) ->
         segments_intersect(p1, p2, p3, p4)
     };
     // Small outlines (the many tiny charts of a Smart UV Project cut): every pair, no grid.
+    let mut found: Vec<(usize, usize)> = Vec::new();
     if n <= brute_force {
-        return (0..n).any(|i| (i + 1..n).any(|j| crossing(i, j)));
+        'all: for i in 0..n {
+            for j in i + 1..n {
+                if crossing(i, j) {
+                    found.push((i, j));
+                    if found.len() >= limit {
+                        break 'all;
+                    }
+                }
+            }
+        }
+        return found.into_iter().map(|(i, j)| pair(i, j)).collect();
     }
     let cell = (total_len / n as f64).max(extent / 1024.0);
     let nx = (((hi[0] - lo[0]) / cell) as usize + 1).min(1024);
@@ -512,7 +537,27 @@ fn self_overlap_with(uv: &[[f64; 2]], loops: &[Vec<u32>], brute_force: usize) ->
             }
         }
     }
-    grid.values().any(|bucket| (0..bucket.len()).any(|x| (x + 1..bucket.len()).any(|y| crossing(bucket[x] as usize, bucket[y] as usize))))
+    // Buckets in cell order, so which pairs are found first does not depend on hashing.
+    let mut cells: Vec<(&usize, &Vec<u32>)> = grid.iter().collect();
+    cells.sort_unstable_by_key(|c| *c.0);
+    'cells: for (_, bucket) in cells {
+        for x in 0..bucket.len() {
+            for y in x + 1..bucket.len() {
+                let (i, j) = (bucket[x] as usize, bucket[y] as usize);
+                if crossing(i, j) {
+                    let key = (i.min(j), i.max(j));
+                    if !found.contains(&key) {
+                        found.push(key);
+                        if found.len() >= limit {
+                            break 'cells;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    found.sort_unstable();
+    found.into_iter().map(|(i, j)| pair(i, j)).collect()
 }
 
 /// Outlines of at most this many segments are tested pair by pair in
@@ -906,6 +951,13 @@ mod tests {
             let pairwise = self_overlap_with(&uv, &loops, usize::MAX);
             let grid = self_overlap_with(&uv, &loops, 0);
             assert_eq!(pairwise, grid, "case {case}: {uv:?}");
+            // Every crossing pair, by both paths: the same pairs, in the same order.
+            let all_pairwise = boundary_crossings_with(&uv, &loops, usize::MAX, usize::MAX);
+            let all_grid = boundary_crossings_with(&uv, &loops, 0, usize::MAX);
+            assert_eq!(all_pairwise, all_grid, "case {case}");
+            assert_eq!(all_pairwise.is_empty(), !pairwise);
+            // A limit stops at the first pairs.
+            assert_eq!(boundary_crossings_with(&uv, &loops, usize::MAX, 1).len(), usize::from(pairwise));
             if pairwise { crossing += 1 } else { clean += 1 }
         }
         assert!(crossing > 50 && clean > 50, "{crossing} crossing, {clean} clean");

@@ -22,7 +22,9 @@
 //! 4. Check: [`rule::AtlasRule`] (a disk, no flips, an outline that does not cross itself,
 //!    at most 5% of the area outside `[1/s, s]` of the island's density).
 //! 5. Repair: [`repair::repair`] adds a cone at the worst region and re-cuts, then halves the
-//!    chart, each half taking the road again.
+//!    chart, each half taking the road again. On a large piece whose only problem is an
+//!    outline that crosses itself at a few places, [`peel::apply`] first makes the faces
+//!    there islands of their own, keeping the rest's map.
 //! 6. Last resort: [`last_resort::apply`] maps a piece that still breaks the rule after its
 //!    repair by the method's flip-free kin or by `scaffold` (globally bijective), reported as
 //!    a fallback.
@@ -32,6 +34,7 @@
 
 pub mod last_resort;
 pub mod outcome;
+pub mod peel;
 pub mod phases;
 pub mod predict;
 pub mod repair;
@@ -156,6 +159,14 @@ fn road(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], depth: us
     let broken = !report.status.mapped() || ctx.rule.broken(&report).is_some();
     let first = Piece { chart: None, report, uv, face_flips, seams: Vec::new(), area: chart_area(chart) };
     if road == Triage::SolveThenRepair && broken {
+        // A large disk whose outline crosses itself at a few places keeps its map: the faces
+        // there become islands of their own.
+        let mut peeled = vec![first];
+        peel::apply(ctx, chart, &mut peeled);
+        if peeled.len() > 1 {
+            return peeled;
+        }
+        let first = peeled.pop().expect("one piece");
         let cutter = solver.map(|s| repair::cutter_with(ctx, chart, s));
         repair::repair(ctx, chart, base_seams, depth, Some(first), cutter)
     } else {

@@ -27,6 +27,13 @@ pub struct Phases {
     pub predicted_rounds: usize,
     /// Charts halved by the last-resort split.
     pub splits: usize,
+    /// Of `splits`, those made before any solve of the chart, because the prediction kept
+    /// the rule with a mean area distortion above
+    /// [`crate::pipeline::repair::MEAN_AREA_LIMIT`].
+    pub predicted_splits: usize,
+    /// Pieces whose outline crossed itself made valid by peeling the faces at the crossings
+    /// into islands of their own ([`crate::pipeline::peel`]).
+    pub peels: usize,
     /// Solves of the last resort for pieces that still broke the rule after repair: the
     /// method's flip-free kin, then `scaffold` ([`crate::pipeline::last_resort`]; each also
     /// counted in `repair_pieces`).

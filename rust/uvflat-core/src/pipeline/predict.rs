@@ -60,6 +60,9 @@ pub struct Plan {
     pub cut: Option<ChartCuts>,
     /// Whether every piece of that plan is predicted to keep Max Stretch.
     pub keeps_rule: bool,
+    /// The predicted mean area distortion of that plan (area-weighted `max(r, 1/r)` over its
+    /// pieces), `NaN` when a piece could not be predicted.
+    pub mean_area: f64,
 }
 
 /// Plan the cones of `chart` (cut by `cutter`) from `seed` (see the module docs). `mask`: the
@@ -77,6 +80,7 @@ pub fn plan(
     let mut seeds = seed.to_vec();
     // Best plan: its cut, predicted excess area and the cones its crushed regions would add.
     let mut best: Option<(ChartCuts, f64, Vec<u32>)> = None;
+    let mut best_mean = f64::NAN;
     let mut single = false;
     let mut best_keeps_rule = false;
     let chart_area = super::chart_area(chart);
@@ -99,6 +103,9 @@ pub fn plan(
         // regions of the worst one.
         let mut excess = 0.0;
         let mut rule_excess = 0.0;
+        // Area-weighted sum of the pieces' predicted mean area distortion (`NaN` once a piece
+        // is not predicted).
+        let mut mean_sum = 0.0;
         let mut worst: Option<(f64, usize, Ratios)> = None;
         let n_pieces = if whole { 1 } else { pieces.len() };
         for k in 0..n_pieces {
@@ -115,10 +122,14 @@ pub fn plan(
                     let total: f64 = r.iter().map(|x| x.1).sum();
                     let mean = r.iter().map(|&(x, a)| a * x.max(1.0 / x)).sum::<f64>() / total.max(f64::MIN_POSITIVE);
                     let soft = if mean.is_finite() { (mean - MEAN_AREA_TARGET).max(0.0) * area } else { area };
+                    mean_sum += mean * area;
                     ((o - super::rule::MAX_OUTSIDE_SHARE).max(0.0) * area, soft, r)
                 }
                 // Not a disk, or the system failed: the method's rounds will tell.
-                None => (0.0, 0.0, Vec::new()),
+                None => {
+                    mean_sum = f64::NAN;
+                    (0.0, 0.0, Vec::new())
+                }
             };
             rule_excess += over;
             let over = over + soft;
@@ -148,6 +159,7 @@ pub fn plan(
         if best.as_ref().is_none_or(|b| excess < b.1) {
             best = Some((cut.clone(), excess, next.clone()));
             best_keeps_rule = rule_excess <= 0.0;
+            best_mean = mean_sum / chart_area;
         }
         // Done when every piece is predicted to keep the rule and the mean area distortion
         // is within [`NEAR_TARGET`] of its target over the chart (another round would cost a
@@ -167,7 +179,7 @@ pub fn plan(
         }
     }
     match best {
-        Some((cut, _, _)) => Plan { cut: Some(cut), keeps_rule: best_keeps_rule },
-        None => Plan { cut: None, keeps_rule: false },
+        Some((cut, _, _)) => Plan { cut: Some(cut), keeps_rule: best_keeps_rule, mean_area: best_mean },
+        None => Plan { cut: None, keeps_rule: false, mean_area: f64::NAN },
     }
 }

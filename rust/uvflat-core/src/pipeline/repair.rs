@@ -24,6 +24,11 @@
 //! where cones do not relieve it, such as the saddles between handles) is split the same way;
 //! its halves replace it only when they keep the rule and take the mean down by
 //! [`MEAN_AREA_GAIN`]. Disks solved as they are that keep the rule are not split for it.
+//! When the prediction already keeps the rule with a mean above [`MEAN_AREA_LIMIT`] (the
+//! method's map would be solved only to be split for it), the split comes before any solve
+//! of the chart: its halves are kept when they keep the rule and lower the predicted mean by
+//! [`MEAN_AREA_GAIN`]; otherwise the rounds solve the chart and the same halves are weighed
+//! against it at the split stage (counted in `Phases::predicted_splits`).
 //! Pieces that still break the rule when every split level has had its try are mapped by the
 //! method's flip-free kin or `scaffold` ([`super::last_resort`]); under an area-balancing
 //! method (SLIM, ARAP, scaffold) an outline that crosses itself is handed to `scaffold` before
@@ -82,14 +87,41 @@ pub fn repair<'a>(
     // keep the rule, more cones will not either: one solve of the best plan, then the split.
     // Methods that balance area (SLIM, ARAP, scaffold) often keep the rule where the
     // conformal prediction breaks it: they start from the cutter's cones as they are.
-    let (rounds, mut planned) = if ctx.options.method.balances_area() {
-        (cuts::REPAIR_ROUNDS, None)
+    let (rounds, mut planned, predicted_mean) = if ctx.options.method.balances_area() {
+        (cuts::REPAIR_ROUNDS, None, f64::NAN)
     } else {
         let t = std::time::Instant::now();
         let plan = super::predict::plan(ctx, chart, &cutter, base_seams, &mask, &seed);
         ctx.clock.add(|p| p.plan_cuts += t.elapsed().as_secs_f64());
-        (if plan.keeps_rule { cuts::REPAIR_ROUNDS } else { 0 }, plan.cut)
+        let mean = if plan.keeps_rule { plan.mean_area } else { f64::NAN };
+        (if plan.keeps_rule { cuts::REPAIR_ROUNDS } else { 0 }, plan.cut, mean)
     };
+    // The split's candidates, once made, and the halves along the first made before any solve.
+    let mut candidates: Option<Vec<Vec<[u32; 2]>>> = None;
+    let mut presplit: Option<(Vec<[u32; 2]>, Vec<Piece>)> = None;
+    if predicted_mean > MEAN_AREA_LIMIT && depth < cuts::MAX_SPLIT_DEPTH && chart.faces.len() >= 2 {
+        // The plan keeps the rule, but its predicted mean area distortion is above
+        // [`MEAN_AREA_LIMIT`]: the chart would be solved (and its outline checked) only to be
+        // split for it. The prediction is close to the method's map there (bunny subdivided
+        // twice, `abf`: 1.367 predicted, 1.365 solved), so the split comes first; its halves
+        // are kept when they keep the rule and lower the predicted mean by
+        // [`MEAN_AREA_GAIN`], else the rounds solve the chart and the split stage weighs the
+        // same halves against it.
+        let t = std::time::Instant::now();
+        let list = cuts::split::candidates(cutter.graph(), cutter.costs(), chart, ctx.avoid);
+        // The halves make their own cutting state; a later round factors this one again.
+        cutter.release_factors();
+        ctx.clock.add(|p| p.plan_cuts += t.elapsed().as_secs_f64());
+        if let Some(split) = list.first().filter(|s| !s.is_empty()).cloned() {
+            let out = halves(ctx, chart, base_seams, &mask, depth, &split);
+            ctx.clock.add(|p| p.predicted_splits += 1);
+            if all_valid(ctx, &out) && mean_area(&out) <= predicted_mean - MEAN_AREA_GAIN {
+                return out;
+            }
+            presplit = Some((split, out));
+        }
+        candidates = Some(list);
+    }
     for round in 0..=rounds {
         if crate::progress::cancelled() {
             // The unwrap is discarded: no more solves.
@@ -131,6 +163,9 @@ pub fn repair<'a>(
             };
             pieces.push(Piece::new(Some(c), report, uv, face_flips, seams));
         }
+        // A large piece whose outline crosses itself at a few places keeps its map: the
+        // faces there become islands of their own ([`super::peel`]).
+        super::peel::apply(ctx, chart, &mut pieces);
         ctx.clock.add(|p| {
             p.repair_solve += t.elapsed().as_secs_f64();
             p.repair_pieces += n_pieces;
@@ -195,49 +230,18 @@ pub fn repair<'a>(
         // also the planar one when the first leaves a piece that breaks the rule (one more
         // attempt per chart of that level, so the work stays bounded).
         let t = std::time::Instant::now();
-        let candidates = cuts::split::candidates(cutter.graph(), cutter.costs(), chart, ctx.avoid);
+        let candidates =
+            candidates.take().unwrap_or_else(|| cuts::split::candidates(cutter.graph(), cutter.costs(), chart, ctx.avoid));
         // The chart's cutting state (its graph, costs and the scale system's factor: 0.3 GB
         // on a 576k-triangle chart) is not needed by the halves, which make their own.
         drop(cutter);
         ctx.clock.add(|p| p.plan_cuts += t.elapsed().as_secs_f64());
         let tries = if depth + 1 == cuts::MAX_SPLIT_DEPTH { candidates.len() } else { 1 };
         for split in candidates.into_iter().take(tries).filter(|s| !s.is_empty()) {
-            ctx.clock.add(|p| p.splits += 1);
-            let mut all: Vec<[u32; 2]> = base_seams.to_vec();
-            all.extend_from_slice(&split);
-            let halves = build_charts_with(ctx.mesh, &all, Some(&mask), ctx.render);
-            for h in &halves {
-                h.inherit_vertex_order(chart);
-            }
-            // Each half takes the pipeline's road again (cut, or solve then repair), the halves
-            // in parallel (in turn on a large chart, [`SEQUENTIAL_HALVES_FROM`]); results in
-            // half order, so the outcome does not depend on threads.
-            // The unwrap's progress goes with them, so a cancel reaches their solves.
-            let progress = crate::progress::current();
-            let lists: Vec<Vec<Piece>> = if chart.triangles.len() >= SEQUENTIAL_HALVES_FROM {
-                // Large halves one after the other: each solve's factorizations use every core
-                // already, and two at once raised the peak memory.
-                halves.into_iter().map(|h| super::run(ctx, h, &all, depth + 1)).collect()
-            } else {
-                use rayon::prelude::*;
-                halves
-                    .into_par_iter()
-                    .map(|h| {
-                        let _guard = progress.as_ref().map(|p| p.enter());
-                        super::run(ctx, h, &all, depth + 1)
-                    })
-                    .collect()
+            let out = match presplit.take() {
+                Some((seams, out)) if seams == split => out,
+                _ => halves(ctx, chart, base_seams, &mask, depth, &split),
             };
-            let mut out = Vec::new();
-            for (k, mut list) in lists.into_iter().enumerate() {
-                if k == 0 {
-                    if let Some(p) = list.first_mut() {
-                        p.seams.extend_from_slice(&split);
-                        p.report.cut_length += split_length(ctx.mesh, &split);
-                    }
-                }
-                out.extend(list);
-            }
             let take = if soft { all_valid(ctx, &out) && lowers_mean_area(&out, &best) } else { better(ctx, &out, &best) };
             if take {
                 best = out;
@@ -253,6 +257,48 @@ pub fn repair<'a>(
         super::last_resort::apply(ctx, chart, &mut best, "its cones and splits");
     }
     best
+}
+
+/// The halves of `chart` split along `split` (mesh vertex pairs), each taken through the
+/// pipeline's road again at `depth + 1`, in half order; the split's seams go with the first.
+fn halves(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], mask: &[bool], depth: usize, split: &[[u32; 2]]) -> Vec<Piece> {
+    ctx.clock.add(|p| p.splits += 1);
+    let mut all: Vec<[u32; 2]> = base_seams.to_vec();
+    all.extend_from_slice(split);
+    let halves = build_charts_with(ctx.mesh, &all, Some(mask), ctx.render);
+    for h in &halves {
+        h.inherit_vertex_order(chart);
+    }
+    // Each half takes the pipeline's road again (cut, or solve then repair), the halves
+    // in parallel (in turn on a large chart, [`SEQUENTIAL_HALVES_FROM`]); results in
+    // half order, so the outcome does not depend on threads.
+    // The unwrap's progress goes with them, so a cancel reaches their solves.
+    let progress = crate::progress::current();
+    let lists: Vec<Vec<Piece>> = if chart.triangles.len() >= SEQUENTIAL_HALVES_FROM {
+        // Large halves one after the other: each solve's factorizations use every core
+        // already, and two at once raised the peak memory.
+        halves.into_iter().map(|h| super::run(ctx, h, &all, depth + 1)).collect()
+    } else {
+        use rayon::prelude::*;
+        halves
+            .into_par_iter()
+            .map(|h| {
+                let _guard = progress.as_ref().map(|p| p.enter());
+                super::run(ctx, h, &all, depth + 1)
+            })
+            .collect()
+    };
+    let mut out = Vec::new();
+    for (k, mut list) in lists.into_iter().enumerate() {
+        if k == 0 {
+            if let Some(p) = list.first_mut() {
+                p.seams.extend_from_slice(split);
+                p.report.cut_length += split_length(ctx.mesh, split);
+            }
+        }
+        out.extend(list);
+    }
+    out
 }
 
 /// Whether every piece of `pieces` that breaks the rule breaks it only by an outline that
@@ -481,7 +527,7 @@ fn worst_vertex(original: &Chart, piece: &Piece, allowed: &[bool], exclude: &[u3
 }
 
 /// 3D length of mesh edges given as vertex pairs.
-fn split_length(mesh: &PolyMesh<'_>, seams: &[[u32; 2]]) -> f64 {
+pub(crate) fn split_length(mesh: &PolyMesh<'_>, seams: &[[u32; 2]]) -> f64 {
     let p = mesh.positions();
     seams.iter().map(|s| crate::geometry::norm(crate::geometry::sub(p[s[1] as usize], p[s[0] as usize]))).sum()
 }

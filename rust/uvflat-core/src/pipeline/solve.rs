@@ -61,9 +61,7 @@ pub fn solve_chart(
             append(&mut report.reason, note);
         }
     }
-    // Flips are counted below, per face (quads on both splits); the rest measured here.
-    let m = metrics::chart_metrics(&chart.positions, &chart.triangles, &solution.uv, &chart.boundary_loops);
-    if !(m.area_3d > 0.0) {
+    let Some(face_flips) = measure(chart, &solution.uv, &mut report, rule) else {
         // Every face is degenerate (collinear or coincident corners): no UV map can match a
         // surface without area, so the chart keeps its UVs and says why.
         report.status = ChartStatus::Failed;
@@ -72,17 +70,30 @@ pub fn solve_chart(
         report.reason = Some("the chart has no 3D area (every face is degenerate): its UVs are left as they were".into());
         report.seconds = start.elapsed().as_secs_f64();
         return (report, None, Vec::new());
+    };
+    report.seconds = start.elapsed().as_secs_f64();
+    (report, Some(solution.uv), face_flips)
+}
+
+/// Measure `uv` on `chart` into `report` (flips on the render triangles and both splits of
+/// every quad, outline overlap, distortion, density spread against `rule.max_stretch`) and
+/// hold it to `rule`. Returns the flipped triangles of every face (aligned with
+/// `chart.faces`), or `None` when the chart has no 3D area (nothing is measured).
+pub fn measure(chart: &Chart, uv: &[[f64; 2]], report: &mut ChartReport, rule: &AtlasRule) -> Option<Vec<u32>> {
+    // Flips are counted below, per face (quads on both splits); the rest measured here.
+    let m = metrics::chart_metrics(&chart.positions, &chart.triangles, uv, &chart.boundary_loops);
+    if !(m.area_3d > 0.0) {
+        return None;
     }
     // Per face (the render triangles of n-gons that kept the core's split count too); the
     // report's count is their sum.
-    let face_flips = metrics::face_flips(chart, &solution.uv);
+    let face_flips = metrics::face_flips(chart, uv);
     report.flips = face_flips.iter().map(|&n| n as usize).sum();
     report.overlap = m.overlap;
     report.distortion = m.distortion;
-    report.density = metrics::density_spread(&chart.positions, &chart.triangles, &solution.uv, rule.max_stretch);
-    hold_to(rule, &mut report);
-    report.seconds = start.elapsed().as_secs_f64();
-    (report, Some(solution.uv), face_flips)
+    report.density = metrics::density_spread(&chart.positions, &chart.triangles, uv, rule.max_stretch);
+    hold_to(rule, report);
+    Some(face_flips)
 }
 
 /// Mark a mapped report [`ChartStatus::Invalid`] when it breaks `rule`, saying how.

@@ -207,7 +207,9 @@ class UnwrapResult:
         """Where the time went: ``build_charts``, ``plan_cuts``, ``solve``, ``repair_solve``,
         ``measure`` (seconds; per-chart steps summed over threads) and the counts
         ``predicted_rounds``, ``repair_rounds``, ``repair_pieces``, ``splits``,
-        ``last_resort`` (solves of the last resort, the method's flip-free kin then ``scaffold``,
+        ``predicted_splits`` (splits made before any solve, the chart's predicted mean area
+        distortion being too high), ``peels`` (large pieces whose outline crossed itself,
+        made valid by making the faces there islands of their own), ``last_resort`` (solves of the last resort, the method's flip-free kin then ``scaffold``,
         for pieces whose repair still broke the atlas rule)."""
     def as_dict(self) -> dict[str, Any]:
         """All fields as a plain dict (arrays included, chart reports as dicts)."""

@@ -1,0 +1,535 @@
+//! Peel: uncross the outline of a large piece by making the few faces where it crosses itself
+//! an island of their own, instead of solving the piece again or splitting it.
+//!
+//! Precedent: xatlas and PartUV split a chart until its map is valid. On a large piece whose
+//! map keeps the rule everywhere but at a few places where its outline crosses itself, the
+//! split throws the solve away and solves two halves again: on fertility subdivided three
+//! times (576k triangles) with `slim`, the one chart's map had a single pair of crossing
+//! segments among 4,864, and its 34 s solve was followed by a split and 21 s of solves of
+//! the halves. Removing faces from a flip-free map leaves the rest flip-free with the same
+//! density, so the rest keeps its UVs and only the peeled faces are solved again.
+//!
+//! For a piece of at least [`PEEL_FROM`] triangles whose only problem is an outline that
+//! crosses itself:
+//! 1. the patch: where the outline crosses itself, triangles of its two sides overlap (on
+//!    fertility, along a strip whose patch took 7,866 faces: one crossing pair of segments
+//!    says little of how much overlaps). Overlapping triangles joined by shared vertices make sides; for
+//!    each overlapping pair, the side of smaller 3D area is peeled (then, as a second try,
+//!    the other). The patch is the faces within `r` rings (by shared vertices) of the
+//!    peeled triangles' vertices, for `r` in [`RINGS`], never more than [`MAX_PATCH_SHARE`]
+//!    of the piece's faces. An outline that only touches itself overlaps no triangle: the
+//!    touching segments ([`crate::metrics::boundary_crossings`]) stand in for them;
+//! 2. the piece rebuilt with the patch's border as seams: the rest keeps its UVs and is
+//!    measured again, the patch's pieces are solved with the method;
+//! 3. the first attempt whose pieces all keep the rule replaces the piece, its border added
+//!    to the seams. Otherwise the piece is left as it was (the repair's rounds and split
+//!    follow as before).
+//!
+//! Bounded: at most `2 × RINGS.len()` rebuilds of a piece. Deterministic: crossings come in
+//! segment order, rings and borders in face order.
+
+use super::outcome::{ChartStatus, Problem};
+use super::solve::{measure, solve_chart};
+use super::{Context, Piece};
+use crate::charts::{build_charts_with, Chart};
+
+/// Pieces with fewer triangles are not peeled: the repair's one-cone round and split cost
+/// little there, and they keep the piece whole or in halves instead of adding small islands.
+pub const PEEL_FROM: usize = 100_000;
+
+/// Most pairs of touching outline segments whose faces a peel takes when no triangles
+/// overlap.
+pub const MAX_TOUCHES: usize = 64;
+
+/// Rings of faces around the crossings tried, in order.
+pub const RINGS: [usize; 3] = [1, 2, 4];
+
+/// Largest share of a piece's faces a patch may take.
+pub const MAX_PATCH_SHARE: f64 = 0.05;
+
+/// The note a peeled piece's report carries.
+const NOTE: &str = "its outline crossed itself: the faces there were made an island of their own";
+
+/// Peel every piece of `pieces` that qualifies (see the module docs); `original`: the chart
+/// a piece without a chart of its own stands for.
+pub fn apply(ctx: &Context<'_, '_>, original: &Chart, pieces: &mut Vec<Piece>) {
+    apply_from(ctx, original, pieces, PEEL_FROM);
+}
+
+/// [`apply`] to pieces of at least `min_triangles` triangles.
+fn apply_from(ctx: &Context<'_, '_>, original: &Chart, pieces: &mut Vec<Piece>, min_triangles: usize) {
+    let mut k = 0;
+    while k < pieces.len() {
+        let replaced = {
+            let p = &pieces[k];
+            let chart = p.chart.as_ref().unwrap_or(original);
+            let due = chart.triangles.len() >= min_triangles
+                && p.report.status.mapped()
+                && ctx.rule.broken(&p.report) == Some(Problem::Overlap)
+                && !super::pinned(ctx, chart);
+            if due {
+                peel(ctx, chart, p)
+            } else {
+                None
+            }
+        };
+        match replaced {
+            Some(new) => {
+                let n = new.len();
+                pieces.splice(k..k + 1, new);
+                ctx.clock.add(|p| p.peels += 1);
+                k += n;
+            }
+            None => k += 1,
+        }
+    }
+}
+
+/// The pieces that replace `piece` (of `chart`), or `None` when no attempt keeps the rule.
+fn peel(ctx: &Context<'_, '_>, chart: &Chart, piece: &Piece) -> Option<Vec<Piece>> {
+    let uv = piece.uv.as_ref()?;
+    let polygons = crate::cuts::graph::face_polygons(ctx.mesh, chart);
+    let vertex_faces = vertex_faces(&polygons, chart.positions.len());
+    // The piece's own seams: every outline edge (slits included, whose two sides are both in
+    // the piece).
+    let mut outline: Vec<[u32; 2]> = Vec::new();
+    for l in &chart.boundary_loops {
+        for i in 0..l.len() {
+            outline.push(mesh_pair(chart, l[i], l[(i + 1) % l.len()]));
+        }
+    }
+    let mut mask = vec![false; ctx.mesh.n_faces()];
+    // Chart face of every mesh face of the piece, and where its corners start.
+    let mut face_at = vec![u32::MAX; ctx.mesh.n_faces()];
+    let mut corner_start = Vec::with_capacity(polygons.len());
+    let mut at = 0usize;
+    for (i, &f) in chart.faces.iter().enumerate() {
+        mask[f as usize] = true;
+        face_at[f as usize] = i as u32;
+        corner_start.push(at);
+        at += polygons[i].len();
+    }
+    let limit = (MAX_PATCH_SHARE * polygons.len() as f64) as usize;
+    // Where the outline crosses itself, the triangles on its two sides overlap (often along
+    // a strip, not at one point): the patch holds the overlapping triangles of one side. An
+    // outline that only touches itself overlaps no triangle: the patch holds the touching
+    // segments of one side.
+    let mut sides = overlap_sides(chart, uv);
+    if sides.iter().all(|s| s.is_empty()) {
+        let touching = crate::metrics::boundary_crossings(uv, &chart.boundary_loops, MAX_TOUCHES);
+        sides = [0, 1].map(|k| touching.iter().flat_map(|c| c[k]).collect());
+    }
+    for seeds in sides.iter().filter(|s| !s.is_empty()) {
+        for &r in &RINGS {
+            let patch = rings(&polygons, &vertex_faces, &seeds, r);
+            if patch.iter().filter(|&&x| x).count() > limit {
+                break;
+            }
+            let border = border_edges(chart, &polygons, &vertex_faces, &patch);
+            if border.is_empty() {
+                continue;
+            }
+            let mut seams = outline.clone();
+            seams.extend_from_slice(&border);
+            seams.sort_unstable();
+            seams.dedup();
+            let rebuilt = build_charts_with(ctx.mesh, &seams, Some(&mask), ctx.render);
+            let mut out: Vec<Piece> = Vec::with_capacity(rebuilt.len());
+            let mut valid = true;
+            for c in rebuilt {
+                c.inherit_vertex_order(chart);
+                let in_patch = patch[face_at[c.faces[0] as usize] as usize];
+                let (report, uv, flips) = if in_patch {
+                    solve_chart(&c, ctx.pins, ctx.options, &ctx.rule)
+                } else {
+                    keep_uvs(ctx, chart, piece, uv, &c, &face_at, &corner_start)
+                };
+                valid &= report.status.mapped() && ctx.rule.broken(&report).is_none();
+                out.push(Piece::new(Some(c), report, uv, flips, Vec::new()));
+                if !valid {
+                    break;
+                }
+            }
+            if valid && !out.is_empty() {
+                let length = super::repair::split_length(ctx.mesh, &border);
+                let first = &mut out[0];
+                first.seams = piece.seams.clone();
+                first.seams.extend_from_slice(&border);
+                first.report.cones = piece.report.cones;
+                first.report.cut_length = piece.report.cut_length + length;
+                return Some(out);
+            }
+        }
+    }
+    None
+}
+
+/// The vertices of the overlapping triangles of `chart` under `uv` to peel, two ways: for
+/// each pair of overlapping triangles, the one of the side (its overlapping triangles joined
+/// by shared vertices) of smaller area, and the other one. Empty when no triangles overlap.
+fn overlap_sides(chart: &Chart, uv: &[[f64; 2]]) -> [Vec<u32>; 2] {
+    let pairs = overlapping_triangles(&chart.triangles, uv);
+    if pairs.is_empty() {
+        return [Vec::new(), Vec::new()];
+    }
+    // Sides: the overlapping triangles joined by shared vertices.
+    let mut tris: Vec<u32> = pairs.iter().flat_map(|p| [p.0, p.1]).collect();
+    tris.sort_unstable();
+    tris.dedup();
+    let mut uf = crate::charts::UnionFind::new(chart.positions.len());
+    for &t in &tris {
+        let [a, b, c] = chart.triangles[t as usize];
+        uf.union(a, b);
+        uf.union(b, c);
+    }
+    let mut area: std::collections::BTreeMap<u32, f64> = Default::default();
+    for &t in &tris {
+        let [a, b, c] = chart.triangles[t as usize];
+        let p = [chart.positions[a as usize], chart.positions[b as usize], chart.positions[c as usize]];
+        *area.entry(uf.find(a)).or_insert(0.0) += crate::geometry::triangle_area(p);
+    }
+    // Per pair, the side to remove: the smaller one (ties to the lower root), unless one of the
+    // two is removed already; and the other way round.
+    let mut removed: [std::collections::BTreeSet<u32>; 2] = Default::default();
+    for &(s, t) in &pairs {
+        let (rs, rt) = (uf.find(chart.triangles[s as usize][0]), uf.find(chart.triangles[t as usize][0]));
+        let small = if (area[&rs], rs) <= (area[&rt], rt) { (rs, rt) } else { (rt, rs) };
+        for (k, pick) in [(0, small.0), (1, small.1)] {
+            if !removed[k].contains(&rs) && !removed[k].contains(&rt) {
+                removed[k].insert(pick);
+            }
+        }
+    }
+    let mut vertices = |roots: &std::collections::BTreeSet<u32>| {
+        let mut v: Vec<u32> = tris
+            .iter()
+            .flat_map(|&t| chart.triangles[t as usize])
+            .filter(|&v| roots.contains(&uf.find(v)))
+            .collect();
+        v.sort_unstable();
+        v.dedup();
+        v
+    };
+    let first = vertices(&removed[0]);
+    [first, vertices(&removed[1])]
+}
+
+/// Pairs `(s, t)`, `s < t`, of triangles that share no vertex and whose UV interiors
+/// overlap, sorted. Triangles are binned on a uniform grid of about their mean size.
+fn overlapping_triangles(triangles: &[[u32; 3]], uv: &[[f64; 2]]) -> Vec<(u32, u32)> {
+    let n = triangles.len();
+    if n < 2 {
+        return Vec::new();
+    }
+    let corner = |t: usize, k: usize| uv[triangles[t][k] as usize];
+    let bbox = |t: usize| {
+        let (a, b, c) = (corner(t, 0), corner(t, 1), corner(t, 2));
+        ([a[0].min(b[0]).min(c[0]), a[1].min(b[1]).min(c[1])], [a[0].max(b[0]).max(c[0]), a[1].max(b[1]).max(c[1])])
+    };
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    let mut size = 0.0;
+    for t in 0..n {
+        let (l, h) = bbox(t);
+        lo = [lo[0].min(l[0]), lo[1].min(l[1])];
+        hi = [hi[0].max(h[0]), hi[1].max(h[1])];
+        size += (h[0] - l[0]).max(h[1] - l[1]);
+    }
+    let cell = (size / n as f64).max((hi[0] - lo[0]).max(hi[1] - lo[1]) / 4096.0);
+    if !(cell > 0.0 && cell.is_finite()) {
+        return Vec::new();
+    }
+    let nx = ((hi[0] - lo[0]) / cell) as u64 + 1;
+    let at = |x: f64, o: f64| ((x - o) / cell) as u64;
+    let mut binned: Vec<(u64, u32)> = Vec::with_capacity(2 * n);
+    for t in 0..n {
+        let (l, h) = bbox(t);
+        for gy in at(l[1], lo[1])..=at(h[1], lo[1]) {
+            for gx in at(l[0], lo[0])..=at(h[0], lo[0]) {
+                binned.push((gy * nx + gx, t as u32));
+            }
+        }
+    }
+    binned.sort_unstable();
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < binned.len() {
+        let mut j = i;
+        while j < binned.len() && binned[j].0 == binned[i].0 {
+            j += 1;
+        }
+        for x in i..j {
+            for y in x + 1..j {
+                let (s, t) = (binned[x].1 as usize, binned[y].1 as usize);
+                if triangles[s].iter().any(|v| triangles[t].contains(v)) {
+                    continue;
+                }
+                let (s_tri, t_tri) = ([corner(s, 0), corner(s, 1), corner(s, 2)], [corner(t, 0), corner(t, 1), corner(t, 2)]);
+                if interiors_overlap(s_tri, t_tri) {
+                    out.push((s.min(t) as u32, s.max(t) as u32));
+                }
+            }
+        }
+        i = j;
+    }
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
+/// Whether two UV triangles' interiors overlap: no edge direction of either separates them
+/// (separating axis test; touching counts as apart).
+fn interiors_overlap(a: [[f64; 2]; 3], b: [[f64; 2]; 3]) -> bool {
+    for tri in [a, b] {
+        for k in 0..3 {
+            let (p, q) = (tri[k], tri[(k + 1) % 3]);
+            let axis = [q[1] - p[1], p[0] - q[0]];
+            let project = |t: [[f64; 2]; 3]| {
+                let d: Vec<f64> = t.iter().map(|v| v[0] * axis[0] + v[1] * axis[1]).collect();
+                (d[0].min(d[1]).min(d[2]), d[0].max(d[1]).max(d[2]))
+            };
+            let (a_lo, a_hi) = project(a);
+            let (b_lo, b_hi) = project(b);
+            if a_hi <= b_lo || b_hi <= a_lo {
+                return false;
+            }
+        }
+    }
+    true
+}
+
+/// The rest `c` of `piece` (of `chart`) with the piece's UVs, measured again.
+fn keep_uvs(
+    ctx: &Context<'_, '_>,
+    chart: &Chart,
+    piece: &Piece,
+    uv: &[[f64; 2]],
+    c: &Chart,
+    face_at: &[u32],
+    corner_start: &[usize],
+) -> (super::outcome::ChartReport, Option<Vec<[f64; 2]>>, Vec<u32>) {
+    // Corners come in face order in both charts: a face's corners in `c` are its corners in
+    // `chart`, in the same order.
+    let mut new_uv = vec![[0.0; 2]; c.positions.len()];
+    let mut at = 0usize;
+    for &f in &c.faces {
+        let m = ctx.mesh.face_corners(f as usize).len();
+        let from = corner_start[face_at[f as usize] as usize];
+        for k in 0..m {
+            new_uv[c.corner_vertex[at + k].1 as usize] = uv[chart.corner_vertex[from + k].1 as usize];
+        }
+        at += m;
+    }
+    let mut report = super::outcome::ChartReport::new(c, piece.report.method);
+    // A fallback's report names the method that mapped it (the rule's check replaced its
+    // status and problem).
+    let fell_back = piece.report.method != ctx.options.method.name();
+    report.status = if fell_back { ChartStatus::Fallback } else { ChartStatus::Solved };
+    report.problem = fell_back.then_some(Problem::FellBack);
+    // The piece's note without the overlap the rule found (it is gone).
+    let overlap = "the island's outline crosses itself";
+    report.reason = piece
+        .report
+        .reason
+        .as_deref()
+        .map(|r| r.trim_end_matches(overlap).trim_end_matches("; ").to_string())
+        .filter(|r| !r.is_empty());
+    super::solve::append(&mut report.reason, NOTE.to_string());
+    report.iterations = piece.report.iterations;
+    report.residual = piece.report.residual;
+    report.seconds = piece.report.seconds;
+    match measure(c, &new_uv, &mut report, &ctx.rule) {
+        Some(flips) => (report, Some(new_uv), flips),
+        None => (report, None, Vec::new()),
+    }
+}
+
+/// The faces around every vertex, in face order.
+fn vertex_faces(polygons: &[Vec<u32>], n: usize) -> Vec<Vec<u32>> {
+    let mut out: Vec<Vec<u32>> = vec![Vec::new(); n];
+    for (f, poly) in polygons.iter().enumerate() {
+        for &v in poly {
+            if out[v as usize].last() != Some(&(f as u32)) {
+                out[v as usize].push(f as u32);
+            }
+        }
+    }
+    out
+}
+
+/// Faces within `r` rings of `seeds`: ring 1 holds the faces at a seed vertex, each further
+/// ring the faces that share a vertex with the one before.
+fn rings(polygons: &[Vec<u32>], vertex_faces: &[Vec<u32>], seeds: &[u32], r: usize) -> Vec<bool> {
+    let mut inside = vec![false; polygons.len()];
+    let mut front: Vec<u32> = seeds.to_vec();
+    for _ in 0..r {
+        let mut next = Vec::new();
+        for &v in &front {
+            for &f in &vertex_faces[v as usize] {
+                if !inside[f as usize] {
+                    inside[f as usize] = true;
+                    next.extend_from_slice(&polygons[f as usize]);
+                }
+            }
+        }
+        next.sort_unstable();
+        next.dedup();
+        front = next;
+    }
+    inside
+}
+
+/// Edges between a face of `patch` and a face outside it, as sorted mesh vertex pairs.
+fn border_edges(chart: &Chart, polygons: &[Vec<u32>], vertex_faces: &[Vec<u32>], patch: &[bool]) -> Vec<[u32; 2]> {
+    let mut out = Vec::new();
+    for (f, poly) in polygons.iter().enumerate() {
+        if !patch[f] {
+            continue;
+        }
+        for i in 0..poly.len() {
+            let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
+            let across = vertex_faces[a as usize].iter().any(|&g| !patch[g as usize] && polygons[g as usize].contains(&b));
+            if across {
+                out.push(mesh_pair(chart, a, b));
+            }
+        }
+    }
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
+/// The mesh vertices of chart vertices `a` and `b`, sorted.
+fn mesh_pair(chart: &Chart, a: u32, b: u32) -> [u32; 2] {
+    let (ma, mb) = (chart.mesh_vertex[a as usize], chart.mesh_vertex[b as usize]);
+    [ma.min(mb), ma.max(mb)]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pipeline::outcome::ChartReport;
+    use crate::pipeline::phases::PhaseClock;
+    use crate::pipeline::rule::AtlasRule;
+    use crate::unwrap::UnwrapOptions;
+
+    #[test]
+    fn triangle_interiors_overlap_only_when_no_axis_separates_them() {
+        let t = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
+        let moved = |dx: f64, dy: f64| t.map(|p| [p[0] + dx, p[1] + dy]);
+        assert!(interiors_overlap(t, moved(0.2, 0.2)));
+        assert!(interiors_overlap(t, [[0.1, 0.1], [0.2, 0.1], [0.1, 0.2]]), "one inside the other");
+        assert!(!interiors_overlap(t, moved(2.0, 0.0)));
+        assert!(!interiors_overlap(t, moved(1.0, 0.0)), "touching at a corner");
+        // Sharing the hypotenuse from the other side: touching, not overlapping.
+        assert!(!interiors_overlap(t, [[1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]));
+        // Apart along the hypotenuse's normal only (both boxes overlap).
+        assert!(!interiors_overlap(t, [[0.6, 0.6], [1.6, 0.6], [0.6, 1.6]]));
+    }
+
+    /// A flat strip `cols × rows` of unit-ish squares (two triangles each), and its UVs laid
+    /// along a circle of radius `radius` over `turn` radians: past a full turn its two ends
+    /// lie on each other, though no triangle flips.
+    fn coiled_strip(cols: usize, rows: usize, turn: f64, radius: f64) -> (Vec<[f64; 3]>, Vec<u32>, Vec<u32>, Vec<[f64; 2]>) {
+        let width = 0.05 * radius;
+        let length = turn * radius;
+        let mut positions = Vec::new();
+        for j in 0..=rows {
+            for i in 0..=cols {
+                positions.push([length * i as f64 / cols as f64, width * j as f64 / rows as f64, 0.0]);
+            }
+        }
+        let id = |i: usize, j: usize| (j * (cols + 1) + i) as u32;
+        let mut corners = Vec::new();
+        for j in 0..rows {
+            for i in 0..cols {
+                corners.extend([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+                corners.extend([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+        let sizes = vec![3u32; corners.len() / 3];
+        // x along the circle, y inwards (counter-clockwise, so triangles keep their turn).
+        // The radius shrinks by half the width over the strip, so its ends lie half on each
+        // other (no edge of one lies along an edge of the other).
+        let uv = |p: [f64; 3]| {
+            let (a, r) = (p[0] / radius, radius - p[1] - 0.5 * width * p[0] / length);
+            [r * a.cos(), r * a.sin()]
+        };
+        let uvs = positions.iter().map(|&p| uv(p)).collect();
+        (positions, corners, sizes, uvs)
+    }
+
+    #[test]
+    fn a_coiled_strip_is_peeled_where_its_ends_overlap_and_keeps_the_rest_of_its_map() {
+        let turn = 2.0 * std::f64::consts::PI * 1.03;
+        let (positions, corners, sizes, vertex_uv) = coiled_strip(400, 3, turn, 10.0);
+        let mesh = crate::mesh::PolyMesh::new(&positions, &corners, &sizes).unwrap();
+        let charts = crate::charts::build_charts(&mesh, &[], None);
+        assert_eq!(charts.len(), 1);
+        let chart = charts.into_iter().next().unwrap();
+        let uv: Vec<[f64; 2]> = chart.mesh_vertex.iter().map(|&v| vertex_uv[v as usize]).collect();
+        let options = UnwrapOptions::default();
+        let rule = AtlasRule { max_stretch: options.auto_seams.max_stretch, full: true };
+        let mut report = ChartReport::new(&chart, options.method.name());
+        report.status = ChartStatus::Solved;
+        let flips = measure(&chart, &uv, &mut report, &rule).unwrap();
+        // The premise: flip-free and within the density bound, but the outline crosses itself.
+        assert_eq!(report.flips, 0);
+        assert_eq!(rule.broken(&report), Some(Problem::Overlap), "{:?}", report.reason);
+        let pins = std::collections::HashMap::new();
+        let avoid = vec![false; positions.len()];
+        let ctx = Context {
+            mesh: &mesh,
+            render: None,
+            pins: &pins,
+            options: &options,
+            avoid: &avoid,
+            rule,
+            clock: PhaseClock::default(),
+            visibility: crate::cuts::visibility::VisibilityCache::new(corners.len()),
+        };
+        let run = || {
+            let piece = Piece::new(Some(chart.clone()), report.clone(), Some(uv.clone()), flips.clone(), Vec::new());
+            let mut pieces = vec![piece];
+            apply_from(&ctx, &chart, &mut pieces, 0);
+            pieces
+        };
+        let pieces = run();
+        assert!(pieces.len() >= 2, "not peeled: {:?}", pieces[0].report.reason);
+        assert_eq!(ctx.clock.get().peels, 1);
+        let faces: usize = pieces.iter().map(|p| p.report.faces).sum();
+        assert_eq!(faces, chart.faces.len(), "faces lost or doubled");
+        for p in &pieces {
+            assert!(p.report.status.mapped() && rule.broken(&p.report).is_none(), "{:?}", p.report.reason);
+        }
+        // The largest piece is the rest of the strip with its UVs exactly as they were, and
+        // the patch is small.
+        let rest = pieces.iter().max_by_key(|p| p.report.faces).unwrap();
+        assert!(rest.report.faces as f64 >= (1.0 - MAX_PATCH_SHARE) * chart.faces.len() as f64);
+        let rest_chart = rest.chart.as_ref().unwrap();
+        let rest_uv = rest.uv.as_ref().unwrap();
+        for (v, &m) in rest_chart.mesh_vertex.iter().enumerate() {
+            assert_eq!(rest_uv[v], vertex_uv[m as usize], "vertex {m} moved");
+        }
+        assert!(rest.report.reason.as_deref().is_some_and(|r| r.contains(NOTE) && !r.contains("crosses itself")));
+        // The patch's border became seams, carried by the first piece.
+        assert!(!pieces[0].seams.is_empty() && pieces[0].report.cut_length > 0.0);
+        // Deterministic.
+        let again = run();
+        assert_eq!(again.len(), pieces.len());
+        for (a, b) in again.iter().zip(&pieces) {
+            assert_eq!(a.uv, b.uv);
+            assert_eq!(a.seams, b.seams);
+        }
+    }
+
+    #[test]
+    fn a_strip_short_of_a_turn_is_left_alone() {
+        // No crossing: nothing to peel, the piece stays as it is.
+        let (positions, corners, sizes, vertex_uv) = coiled_strip(200, 2, 5.0, 10.0);
+        let mesh = crate::mesh::PolyMesh::new(&positions, &corners, &sizes).unwrap();
+        let chart = crate::charts::build_charts(&mesh, &[], None).into_iter().next().unwrap();
+        let uv: Vec<[f64; 2]> = chart.mesh_vertex.iter().map(|&v| vertex_uv[v as usize]).collect();
+        assert!(overlapping_triangles(&chart.triangles, &uv).is_empty());
+        assert!(crate::metrics::boundary_crossings(&uv, &chart.boundary_loops, 4).is_empty());
+    }
+}
