@@ -13,9 +13,9 @@
 //! crosses itself:
 //! 1. the patch: where the outline crosses itself, triangles of its two sides overlap (on
 //!    fertility, along a strip whose patch took 7,866 faces: one crossing pair of segments
-//!    says little of how much overlaps). Overlapping triangles joined by shared vertices make sides; for
-//!    each overlapping pair, the side of smaller 3D area is peeled (then, as a second try,
-//!    the other). The patch is the faces within `r` rings (by shared vertices) of the
+//!    says little of how much overlaps). Overlapping triangles joined by shared vertices
+//!    make sides; for each overlapping pair, the side of smaller 3D area is peeled (then, as
+//!    a second try, the other). The patch is the faces within `r` rings (by shared vertices) of the
 //!    peeled triangles' vertices, for `r` in [`RINGS`], never more than [`MAX_PATCH_SHARE`]
 //!    of the piece's faces. An outline that only touches itself overlaps no triangle: the
 //!    touching segments ([`crate::metrics::boundary_crossings`]) stand in for them;
@@ -25,8 +25,8 @@
 //!    to the seams. Otherwise the piece is left as it was (the repair's rounds and split
 //!    follow as before).
 //!
-//! Bounded: at most `2 × RINGS.len()` rebuilds of a piece. Deterministic: crossings come in
-//! segment order, rings and borders in face order.
+//! Bounded: at most `2 × RINGS.len()` rebuilds of a piece. Deterministic: overlapping pairs
+//! and sides in index order, rings and borders in face order.
 
 use super::outcome::{ChartStatus, Problem};
 use super::solve::{measure, solve_chart};
@@ -263,8 +263,8 @@ fn overlapping_triangles(triangles: &[[u32; 3]], uv: &[[f64; 2]]) -> Vec<(u32, u
                 if triangles[s].iter().any(|v| triangles[t].contains(v)) {
                     continue;
                 }
-                let (s_tri, t_tri) = ([corner(s, 0), corner(s, 1), corner(s, 2)], [corner(t, 0), corner(t, 1), corner(t, 2)]);
-                if interiors_overlap(s_tri, t_tri) {
+                let tri = |t: usize| [corner(t, 0), corner(t, 1), corner(t, 2)];
+                if interiors_overlap(tri(s), tri(t)) {
                     out.push((s.min(t) as u32, s.max(t) as u32));
                 }
             }
@@ -387,7 +387,8 @@ fn border_edges(chart: &Chart, polygons: &[Vec<u32>], vertex_faces: &[Vec<u32>],
         }
         for i in 0..poly.len() {
             let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
-            let across = vertex_faces[a as usize].iter().any(|&g| !patch[g as usize] && polygons[g as usize].contains(&b));
+            let across =
+                vertex_faces[a as usize].iter().any(|&g| !patch[g as usize] && polygons[g as usize].contains(&b));
             if across {
                 out.push(mesh_pair(chart, a, b));
             }
@@ -429,7 +430,9 @@ mod tests {
     /// A flat strip `cols × rows` of unit-ish squares (two triangles each), and its UVs laid
     /// along a circle of radius `radius` over `turn` radians: past a full turn its two ends
     /// lie on each other, though no triangle flips.
-    fn coiled_strip(cols: usize, rows: usize, turn: f64, radius: f64) -> (Vec<[f64; 3]>, Vec<u32>, Vec<u32>, Vec<[f64; 2]>) {
+    type Strip = (Vec<[f64; 3]>, Vec<u32>, Vec<u32>, Vec<[f64; 2]>);
+
+    fn coiled_strip(cols: usize, rows: usize, turn: f64, radius: f64) -> Strip {
         let width = 0.05 * radius;
         let length = turn * radius;
         let mut positions = Vec::new();

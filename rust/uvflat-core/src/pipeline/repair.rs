@@ -261,7 +261,14 @@ pub fn repair<'a>(
 
 /// The halves of `chart` split along `split` (mesh vertex pairs), each taken through the
 /// pipeline's road again at `depth + 1`, in half order; the split's seams go with the first.
-fn halves(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], mask: &[bool], depth: usize, split: &[[u32; 2]]) -> Vec<Piece> {
+fn halves(
+    ctx: &Context<'_, '_>,
+    chart: &Chart,
+    base_seams: &[[u32; 2]],
+    mask: &[bool],
+    depth: usize,
+    split: &[[u32; 2]],
+) -> Vec<Piece> {
     ctx.clock.add(|p| p.splits += 1);
     let mut all: Vec<[u32; 2]> = base_seams.to_vec();
     all.extend_from_slice(split);
