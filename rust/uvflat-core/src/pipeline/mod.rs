@@ -163,7 +163,8 @@ fn road(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], depth: us
         // there become islands of their own.
         let mut peeled = vec![first];
         peel::apply(ctx, chart, &mut peeled);
-        if peeled.len() > 1 {
+        // A peel replaces the chart's own solve (`chart: None`) by rebuilt pieces.
+        if peeled.len() != 1 || peeled[0].chart.is_some() {
             return peeled;
         }
         let first = peeled.pop().expect("one piece");

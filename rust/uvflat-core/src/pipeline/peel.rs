@@ -326,12 +326,11 @@ fn keep_uvs(
     report.status = if fell_back { ChartStatus::Fallback } else { ChartStatus::Solved };
     report.problem = fell_back.then_some(Problem::FellBack);
     // The piece's note without the overlap the rule found (it is gone).
-    let overlap = "the island's outline crosses itself";
     report.reason = piece
         .report
         .reason
         .as_deref()
-        .map(|r| r.trim_end_matches(overlap).trim_end_matches("; ").to_string())
+        .map(|r| r.trim_end_matches(super::solve::OVERLAP_NOTE).trim_end_matches("; ").to_string())
         .filter(|r| !r.is_empty());
     super::solve::append(&mut report.reason, NOTE.to_string());
     report.iterations = piece.report.iterations;
