@@ -4,22 +4,16 @@
 
 mod common;
 
-use common::{load, shared_meshes, subdivide, Soup};
+use common::{load, octahedron_sphere, shared_meshes, Soup};
 use uvflat_core::charts::build_charts;
 use uvflat_core::cuts::cones::ScaleSolver;
 use uvflat_core::mesh::PolyMesh;
 
 /// An icosphere-like closed mesh: an octahedron subdivided and pushed to an ellipsoid.
 fn ellipsoid(levels: usize) -> Soup {
-    let positions = vec![[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, -1.0]];
-    let faces: [[u32; 3]; 8] = [[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]];
-    let mut s = Soup { positions, corner_verts: faces.iter().flatten().copied().collect(), face_sizes: vec![3; 8] };
-    for _ in 0..levels {
-        s = subdivide(&s);
-    }
+    let mut s = octahedron_sphere(levels);
     for p in &mut s.positions {
-        let n = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
-        *p = [2.0 * p[0] / n, p[1] / n, 0.5 * p[2] / n];
+        *p = [2.0 * p[0], p[1], 0.5 * p[2]];
     }
     s
 }

@@ -219,3 +219,58 @@ fn the_split_is_identical_across_thread_counts() {
     };
     assert_eq!(run(1), run(2));
 }
+
+#[test]
+fn a_long_fine_tube_is_halved_along_a_loop_in_its_narrowed_band() {
+    // 275k triangles: more than five times `split::BAND_POLYGONS` polygons, so the band around
+    // each level holds about that many instead of a fifth of the tube.
+    let (length, n) = (60.0, 112);
+    let step = TAU / n as f64 * 0.87;
+    let m = revolve(&capsule_rings(length, step, |_| 1.0), n);
+    assert!(m.face_sizes.len() > 5 * split::BAND_POLYGONS, "{} triangles", m.face_sizes.len());
+    let o = halve(&m);
+    check_loop("long tube", &o, TAU);
+    let rise: f64 = o.seam.iter().map(|[a, b]| (a[2] - b[2]).abs()).sum();
+    assert!(rise < 0.1 * o.length, "the seam climbs {rise:.3} over a length {:.3}", o.length);
+}
+
+#[test]
+fn a_split_on_the_proxy_fiedler_vector_is_a_loop_around_the_tube() {
+    let (length, n) = (8.0, 32);
+    let step = TAU / n as f64 * 0.87;
+    let m = revolve(&capsule_rings(length, step, |z| 1.0 + 0.1 * (z * 0.7).sin()), n);
+    let mesh = PolyMesh::new(&m.positions, &m.corner_verts, &m.face_sizes).unwrap();
+    let chart = build_charts(&mesh, &[], None).remove(0);
+    let avoid = vec![false; m.positions.len()];
+    let options = AutoSeamOptions::default();
+    let proxy = cuts::coarse::Proxy::with_target(&chart, chart.positions.len() / 4).unwrap();
+    let cutter = cuts::ChartCutter::new(&mesh, &chart, &options, &avoid).with_proxy(proxy);
+    let seams = cutter.split_candidates(&avoid).remove(0);
+    // One loop: every seam vertex has two seam edges, and the seam is connected.
+    let mut degree = std::collections::BTreeMap::<u32, usize>::new();
+    let mut length = 0.0;
+    for &[a, b] in &seams {
+        *degree.entry(a).or_default() += 1;
+        *degree.entry(b).or_default() += 1;
+        let (pa, pb) = (m.positions[a as usize], m.positions[b as usize]);
+        length += ((pa[0] - pb[0]).powi(2) + (pa[1] - pb[1]).powi(2) + (pa[2] - pb[2]).powi(2)).sqrt();
+    }
+    assert!(degree.values().all(|&d| d == 2), "the seam is not a loop: {degree:?}");
+    assert!(length <= 1.3 * TAU * 1.1, "seam length {length:.3}");
+    let halves = build_charts(&mesh, &seams, None);
+    assert_eq!(halves.len(), 2);
+    let area = |c: &uvflat_core::charts::Chart| -> f64 {
+        c.triangles
+            .iter()
+            .map(|t| {
+                let [a, b, d] = t.map(|v| c.positions[v as usize]);
+                let (e, f) = ([b[0] - a[0], b[1] - a[1], b[2] - a[2]], [d[0] - a[0], d[1] - a[1], d[2] - a[2]]);
+                let x = [e[1] * f[2] - e[2] * f[1], e[2] * f[0] - e[0] * f[2], e[0] * f[1] - e[1] * f[0]];
+                0.5 * (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).sqrt()
+            })
+            .sum()
+    };
+    let (a0, a1) = (area(&halves[0]), area(&halves[1]));
+    let share = a0 / (a0 + a1);
+    assert!((share - 0.5).abs() <= 0.1 + 1e-9, "area share {share:.3}");
+}

@@ -148,6 +148,36 @@ impl Chart {
         self.vertex_order.0.get_or_init(|| crate::solvers::ordering::vertex_order(self.positions.len(), &self.triangles))
     }
 
+    /// A chart made of bare triangles, of no input face (`faces` and `corner_vertex` empty,
+    /// `triangle_face` all 0): the coarse proxy a large chart's cones are planned on
+    /// ([`crate::cuts::coarse`]), only solved on.
+    pub(crate) fn proxy(
+        positions: Vec<[f64; 3]>,
+        triangles: Vec<[u32; 3]>,
+        mesh_vertex: Vec<u32>,
+        boundary_loops: Vec<Vec<u32>>,
+        genus: usize,
+        kind: ChartKind,
+    ) -> Chart {
+        Chart {
+            faces: Vec::new(),
+            corner_vertex: Vec::new(),
+            mesh_vertex,
+            positions,
+            triangle_face: vec![0; triangles.len()],
+            triangles,
+            quads: Vec::new(),
+            shown: Vec::new(),
+            shown_face: Vec::new(),
+            polygons: Vec::new(),
+            boundary_loops,
+            genus,
+            kind,
+            defect: None,
+            vertex_order: VertexOrder::default(),
+        }
+    }
+
     /// A copy of the chart with its vertices moved to `positions` (the same triangles, so
     /// [`Chart::vertex_order`] carries over when known: a method's unit frame of a large
     /// piece would otherwise order it anew, about a second at 300k vertices).

@@ -6,6 +6,8 @@
 //! 1. [`cones`]: greedy cone placement on the linearised conformal scale factor (held at 0 on
 //!    the chart's boundary, if any) until `max |u| ≤ ln(max_stretch)` or `max_cones` (a
 //!    closed genus-0 chart always gets 2).
+//!    On a chart of [`coarse::PROXY_FROM`] triangles or more, the cones the prediction plans
+//!    ([`ChartCutter::plan_cut`]) are placed on the chart's coarse proxy ([`coarse`]).
 //! 2. [`cut_graph`]: 2g handle loops by tree–cotree with short loops; an approximate Steiner
 //!    tree joining loops, cones and every boundary loop (so holes are joined to the outline)
 //!    by shortest edge paths; dangling branches pruned.
@@ -31,6 +33,7 @@
 //!
 //! Everything is deterministic: ties break by ids.
 
+pub mod coarse;
 pub mod cones;
 pub mod cut_graph;
 pub mod fiedler;
@@ -266,6 +269,8 @@ pub struct ChartCutter<'a> {
     mirror: Option<symmetry::Mirror>,
     /// The handle loops of the last cut and their root (they depend on the root only).
     loops: std::sync::Mutex<Option<(u32, Vec<bool>)>>,
+    /// The coarse proxy of a large chart ([`coarse`]), made on first use.
+    proxy: std::sync::OnceLock<Option<coarse::Proxy>>,
 }
 
 impl<'a> ChartCutter<'a> {
@@ -352,7 +357,19 @@ impl<'a> ChartCutter<'a> {
             (true, _) => 1,
             (false, _) => 0,
         };
-        ChartCutter { chart, options, graph, cost, allowed, boundary, min_cones, solver, mirror, loops: Default::default() }
+        ChartCutter {
+            chart,
+            options,
+            graph,
+            cost,
+            allowed,
+            boundary,
+            min_cones,
+            solver,
+            mirror,
+            loops: Default::default(),
+            proxy: Default::default(),
+        }
     }
 
     /// The chart's mirror, when [`AutoSeamOptions::symmetry`] asked for one and found it.
@@ -392,16 +409,88 @@ impl<'a> ChartCutter<'a> {
     /// at its vertices, so the chart's own system with the cut's vertices held gives it: one
     /// numeric factorization on the chart's analysis, no new chart, ordering or assembly.
     /// `None` when the system failed.
+    ///
+    /// On a large chart the flattening is the proxy's ([`coarse`]: the cut's vertices held by
+    /// the proxy vertices that represent them), read back on the chart.
     pub fn predicted_ratios_after(&self, cut: &ChartCuts) -> Option<Vec<(f64, f64)>> {
-        let solver = self.solver.as_ref()?;
-        let mut fixed: Vec<u32> = cut.edges.iter().flat_map(|e| [e[0], e[1]]).collect();
-        fixed.sort_unstable();
-        fixed.dedup();
+        let Some(proxy) = self.proxy() else { return self.predicted_ratios_on_chart(cut) };
+        let fixed = cut_vertices(cut);
         if fixed.is_empty() && self.chart.boundary_loops.is_empty() {
             return None;
         }
-        let u = solver.solve_refactored(&fixed)?;
-        ratios_of(self.chart, &u)
+        let mut held: Vec<u32> = fixed.iter().map(|&v| proxy.rep[v as usize]).collect();
+        held.sort_unstable();
+        held.dedup();
+        let u = proxy.solver.solve_refactored(&held)?;
+        ratios_of(self.chart, &proxy.to_chart(&u, &fixed))
+    }
+
+    /// [`Self::predicted_ratios_after`] on the chart's own system, proxy or not.
+    pub fn predicted_ratios_on_chart(&self, cut: &ChartCuts) -> Option<Vec<(f64, f64)>> {
+        let fixed = cut_vertices(cut);
+        if fixed.is_empty() && self.chart.boundary_loops.is_empty() {
+            return None;
+        }
+        ratios_of(self.chart, &self.solver.as_ref()?.solve_refactored(&fixed)?)
+    }
+
+    /// The coarse proxy of the chart ([`coarse::Proxy::new`]: charts of at least
+    /// [`coarse::PROXY_FROM`] triangles), made on first use; `None` on a smaller chart and on
+    /// a mirror-symmetric one (its cones are placed in pairs on the chart itself).
+    pub fn proxy(&self) -> Option<&coarse::Proxy> {
+        if self.mirror.is_some() || self.solver.is_none() {
+            return None;
+        }
+        self.proxy.get_or_init(|| coarse::Proxy::new(self.chart)).as_ref()
+    }
+
+    /// Candidate seams for halving the chart ([`split::candidates`]); on a chart with a proxy
+    /// ([`Self::proxy`]) the Fiedler vector whose levels the split follows is the proxy's,
+    /// read back on the chart (an inverse iteration on the proxy instead of the chart: the
+    /// minimum cut that places the seam is made on the chart).
+    pub fn split_candidates(&self, avoid: &[bool]) -> Vec<Vec<[u32; 2]>> {
+        let fiedler = self.proxy().and_then(|p| Some(p.to_chart(&fiedler::fiedler_vector(&p.chart)?, &[])));
+        split::candidates_with(&self.graph, &self.cost, self.chart, avoid, fiedler)
+    }
+
+    /// This cutter with `proxy` as the chart's proxy, whatever the chart's size (made by the
+    /// caller with [`coarse::Proxy::with_target`]; it is not used on a mirror-symmetric chart).
+    pub fn with_proxy(self, proxy: coarse::Proxy) -> Self {
+        let _ = self.proxy.set(Some(proxy));
+        self
+    }
+
+    /// [`Self::cut`] with the cones placed on the chart's proxy when it has one (a large chart;
+    /// the prediction's rounds, [`crate::pipeline::predict`]): a cone placed on the proxy is a
+    /// vertex of the chart, and `seed_cones` go to the proxy vertices that represent them. The
+    /// cut is made on the chart.
+    pub fn plan_cut(&self, seed_cones: &[u32], extra_cones: usize) -> ChartCuts {
+        let Some(proxy) = self.proxy() else { return self.cut(seed_cones, extra_cones) };
+        let mut seeds: Vec<u32> = Vec::with_capacity(seed_cones.len());
+        for &v in seed_cones {
+            let c = proxy.rep[v as usize];
+            if !seeds.contains(&c) {
+                seeds.push(c);
+            }
+        }
+        let allowed: Vec<bool> = proxy
+            .fine_of
+            .iter()
+            .enumerate()
+            .map(|(c, &v)| self.allowed[v as usize] && proxy.solver.defect[c] > 0.0)
+            .collect();
+        let options = self.options;
+        let mut cones = cones::place_cones(
+            &proxy.solver,
+            &allowed,
+            self.min_cones,
+            options.max_cones + extra_cones,
+            options.max_stretch.ln(),
+            &seeds,
+        );
+        cones.vertices = cones.vertices.iter().map(|&c| proxy.fine_of[c as usize]).collect();
+        cones.u = proxy.to_chart(&cones.u, &cones.vertices);
+        self.cut_with(cones)
     }
 
     /// How many pieces the chart falls into when cut along `cut` (its polygons joined across
@@ -427,13 +516,12 @@ impl<'a> ChartCutter<'a> {
 
     /// Cones and cut for this round (arguments as in [`cut_chart`]).
     pub fn cut(&self, seed_cones: &[u32], extra_cones: usize) -> ChartCuts {
-        let (chart, options, graph, cost, boundary, min_cones) =
-            (self.chart, self.options, &self.graph, &self.cost, &self.boundary, self.min_cones);
+        let (options, min_cones) = (self.options, self.min_cones);
         let seeds = match &self.mirror {
             Some(m) => mirrored(seed_cones, m),
             None => seed_cones.to_vec(),
         };
-        let mut cones = match &self.solver {
+        let cones = match &self.solver {
             Some(solver) => cones::place_cones(
                 solver,
                 &self.allowed,
@@ -444,6 +532,13 @@ impl<'a> ChartCutter<'a> {
             ),
             None => cones::Cones { vertices: seeds.clone(), curvature: vec![0.0; seeds.len()], u: vec![], max_u: f64::INFINITY },
         };
+        self.cut_with(cones)
+    }
+
+    /// The cut of [`Self::cut`] through the cones placed (mirrored when the chart is).
+    fn cut_with(&self, mut cones: cones::Cones) -> ChartCuts {
+        let (chart, options, graph, cost, boundary, min_cones) =
+            (self.chart, self.options, &self.graph, &self.cost, &self.boundary, self.min_cones);
         let mut cone_vertices = cones.vertices.clone();
         if cone_vertices.len() < min_cones {
             // Every vertex is avoided or the system failed: pick far-apart vertices anyway.
@@ -524,6 +619,14 @@ impl<'a> ChartCutter<'a> {
         };
         cut_graph::join_and_prune(graph, cost, loops, cone_vertices, &chart.boundary_loops)
     }
+}
+
+/// The vertices of `cut`'s edges, ascending.
+fn cut_vertices(cut: &ChartCuts) -> Vec<u32> {
+    let mut fixed: Vec<u32> = cut.edges.iter().flat_map(|e| [e[0], e[1]]).collect();
+    fixed.sort_unstable();
+    fixed.dedup();
+    fixed
 }
 
 /// `cones` and their mirror images, in order (each new mirror after its cone), without repeats.

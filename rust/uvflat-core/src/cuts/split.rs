@@ -10,7 +10,8 @@
 //!    area quantile.
 //! 2. For each candidate level `q` of [`LEVELS`] (area quantiles 0.5, 0.4, 0.6, 0.3, 0.7): the
 //!    polygons below `q − BAND/2` are one side, those above `q + BAND/2` the other, and the
-//!    polygons between form a band. The seam is the minimum cut of the band's dual graph
+//!    polygons between form a band (narrower on a chart of more than five times
+//!    [`BAND_POLYGONS`] polygons, so it holds about that many). The seam is the minimum cut of the band's dual graph
 //!    ([`super::min_cut`]) with the cut cost of each edge as capacity (the caller's costs:
 //!    length, cheaper along creases, infinite on edges that touch an avoided vertex): the
 //!    cheapest loop (or path, on a chart with a boundary) that separates the two sides within
@@ -40,6 +41,13 @@ use crate::geometry::norm;
 pub const LEVELS: [f64; 5] = [0.5, 0.4, 0.6, 0.3, 0.7];
 /// Area share of the band around a level in which the seam may move.
 pub const BAND: f64 = 0.2;
+/// Most polygons a band holds, about: on a chart of more than five times as many, the band's
+/// share shrinks to hold this many. On 3holes subdivided three times (460k triangles) a band
+/// of a fifth of the chart held 95k polygons and its minimum cut took 1–3.8 s; one of 25k
+/// polygons took 0.04–0.06 s, but on the lion subdivided twice (267k) its seams left halves
+/// that took three more splits (5 islands against 2). From 50k, charts up to 250k polygons
+/// keep the band of a fifth.
+pub const BAND_POLYGONS: usize = 50_000;
 /// Charts with fewer polygons are split by a plane.
 pub const SPECTRAL_MIN_POLYGONS: usize = 8;
 
@@ -79,11 +87,27 @@ pub fn halve(graph: &ChartGraph, cost: &[f64], chart: &Chart, avoid: &[bool]) ->
 /// planar one (when it differs); empty seam lists are left out. The pipeline tries the second
 /// when the halves of the first do not keep the atlas rule.
 pub fn candidates(graph: &ChartGraph, cost: &[f64], chart: &Chart, avoid: &[bool]) -> Vec<Vec<[u32; 2]>> {
+    candidates_with(graph, cost, chart, avoid, None)
+}
+
+/// [`candidates`] with the chart's Fiedler vector given (`None`: computed here), as a large
+/// chart reads it from its coarse proxy ([`super::ChartCutter::split_candidates`]).
+pub fn candidates_with(
+    graph: &ChartGraph,
+    cost: &[f64],
+    chart: &Chart,
+    avoid: &[bool],
+    fiedler: Option<Vec<f64>>,
+) -> Vec<Vec<[u32; 2]>> {
     let mut out = Vec::new();
     if graph.polygons.len() < 2 {
         return out;
     }
-    if let Some(split) = spectral_halve(graph, cost, chart) {
+    let split = match fiedler {
+        Some(f) => spectral_halve_of(graph, cost, chart, &f),
+        None => spectral_halve(graph, cost, chart),
+    };
+    if let Some(split) = split {
         out.push(split.seams);
     }
     let mut planar = halve_planar(graph, chart, avoid);
@@ -97,11 +121,18 @@ pub fn candidates(graph: &ChartGraph, cost: &[f64], chart: &Chart, avoid: &[bool
 
 /// The spectral split of `chart` (steps 1–3 of the module docs), or `None`.
 pub fn spectral_halve(graph: &ChartGraph, cost: &[f64], chart: &Chart) -> Option<Split> {
-    let np = graph.polygons.len();
-    if np < SPECTRAL_MIN_POLYGONS || cost.len() != graph.edges.len() {
+    if graph.polygons.len() < SPECTRAL_MIN_POLYGONS || cost.len() != graph.edges.len() {
         return None;
     }
-    let f = fiedler_vector(chart)?;
+    spectral_halve_of(graph, cost, chart, &fiedler_vector(chart)?)
+}
+
+/// [`spectral_halve`] along the levels of `f`, a Fiedler vector of the chart (per vertex).
+fn spectral_halve_of(graph: &ChartGraph, cost: &[f64], chart: &Chart, f: &[f64]) -> Option<Split> {
+    let np = graph.polygons.len();
+    if np < SPECTRAL_MIN_POLYGONS || cost.len() != graph.edges.len() || f.len() != chart.positions.len() {
+        return None;
+    }
     let value: Vec<f64> = graph
         .polygons
         .iter()
@@ -151,7 +182,8 @@ fn cut_at_level(
     q: f64,
 ) -> Option<Split> {
     let np = quantile.len();
-    let (lo, hi) = (q - 0.5 * BAND, q + 0.5 * BAND);
+    let band = BAND.min(BAND_POLYGONS as f64 / quantile.len().max(1) as f64);
+    let (lo, hi) = (q - 0.5 * band, q + 0.5 * band);
     // Nodes: 0 the low side, 1 the high side, 2.. the band's polygons.
     let mut node = vec![0u32; np];
     let mut n_nodes = 2u32;

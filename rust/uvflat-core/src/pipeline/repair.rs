@@ -108,7 +108,7 @@ pub fn repair<'a>(
         // [`MEAN_AREA_GAIN`], else the rounds solve the chart and the split stage weighs the
         // same halves against it.
         let t = std::time::Instant::now();
-        let list = cuts::split::candidates(cutter.graph(), cutter.costs(), chart, ctx.avoid);
+        let list = cutter.split_candidates(ctx.avoid);
         // The halves make their own cutting state; a later round factors this one again.
         cutter.release_factors();
         ctx.clock.add(|p| p.plan_cuts += t.elapsed().as_secs_f64());
@@ -231,7 +231,7 @@ pub fn repair<'a>(
         // attempt per chart of that level, so the work stays bounded).
         let t = std::time::Instant::now();
         let candidates =
-            candidates.take().unwrap_or_else(|| cuts::split::candidates(cutter.graph(), cutter.costs(), chart, ctx.avoid));
+            candidates.take().unwrap_or_else(|| cutter.split_candidates(ctx.avoid));
         // The chart's cutting state (its graph, costs and the scale system's factor: 0.3 GB
         // on a 576k-triangle chart) is not needed by the halves, which make their own.
         drop(cutter);

@@ -165,6 +165,23 @@ pub fn mesh_from_args(args: &[String]) -> Soup {
     s
 }
 
+/// A regular octahedron (vertices on the unit axes) subdivided `levels` times, its vertices
+/// pushed onto the unit sphere: a closed genus-0 triangle mesh of `8 · 4^levels` triangles.
+pub fn octahedron_sphere(levels: usize) -> Soup {
+    let positions =
+        vec![[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, -1.0]];
+    let faces: [[u32; 3]; 8] = [[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]];
+    let mut s = Soup { positions, corner_verts: faces.iter().flatten().copied().collect(), face_sizes: vec![3; 8] };
+    for _ in 0..levels {
+        s = subdivide(&s);
+    }
+    for p in &mut s.positions {
+        let n = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+        *p = [p[0] / n, p[1] / n, p[2] / n];
+    }
+    s
+}
+
 pub fn subdivide(s: &Soup) -> Soup {
     assert!(s.face_sizes.iter().all(|&k| k == 3), "subdivision needs a triangle mesh");
     let mut positions = s.positions.clone();
