@@ -1,7 +1,8 @@
 //! The coarse proxy a large chart's cones are planned on (`cuts::coarse`): it keeps the
 //! chart's topology and outline exactly, its vertices are the chart's, it is the same from run
-//! to run, and its prediction of a cut chart's flattening is close to the chart's own and, as
-//! the prediction relies on (`pipeline::predict::PROXY_MARGIN`), not pessimistic.
+//! to run, and its prediction of a cut chart's flattening is close to the chart's own: at most
+//! `pipeline::predict::PROXY_MARGIN` more optimistic (the margin the plan relies on), and at
+//! most 0.02 more pessimistic.
 
 mod common;
 
