@@ -11,10 +11,10 @@
 //! 2. For each candidate level `q` of [`LEVELS`] (area quantiles 0.5, 0.4, 0.6, 0.3, 0.7): the
 //!    polygons below `q − BAND/2` are one side, those above `q + BAND/2` the other, and the
 //!    polygons between form a band (narrower on a chart of more than five times
-//!    [`BAND_POLYGONS`] polygons, so it holds about that many). The seam is the minimum cut of the band's dual graph
-//!    ([`super::min_cut`]) with the cut cost of each edge as capacity (the caller's costs:
-//!    length, cheaper along creases, infinite on edges that touch an avoided vertex): the
-//!    cheapest loop (or path, on a chart with a boundary) that separates the two sides within
+//!    [`BAND_POLYGONS`] polygons, so it holds about that many). The seam is the minimum cut
+//!    of the band's dual graph ([`super::min_cut`]) with the cut cost of each edge as
+//!    capacity (the caller's costs: length, cheaper along creases, infinite on edges that
+//!    touch an avoided vertex): the cheapest loop (or path, on a chart with a boundary) that separates the two sides within
 //!    the band. A level set snapped to polygons would zig-zag across triangle strips; the cut
 //!    follows the straightest, cheapest edges near it instead.
 //! 3. Among levels, one that leaves exactly two connected parts is preferred, then the least
@@ -182,7 +182,7 @@ fn cut_at_level(
     q: f64,
 ) -> Option<Split> {
     let np = quantile.len();
-    let band = BAND.min(BAND_POLYGONS as f64 / quantile.len().max(1) as f64);
+    let band = BAND.min(BAND_POLYGONS as f64 / np.max(1) as f64);
     let (lo, hi) = (q - 0.5 * band, q + 0.5 * band);
     // Nodes: 0 the low side, 1 the high side, 2.. the band's polygons.
     let mut node = vec![0u32; np];
