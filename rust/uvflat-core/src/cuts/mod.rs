@@ -497,6 +497,11 @@ impl<'a> ChartCutter<'a> {
     /// the edges `cut` leaves whole): what [`crate::charts::build_charts_with`] would make of
     /// it, without building them.
     pub fn pieces_after(&self, cut: &ChartCuts) -> usize {
+        self.joined_after(cut).1
+    }
+
+    /// The polygons joined across the edges `cut` leaves whole, and how many pieces they make.
+    fn joined_after(&self, cut: &ChartCuts) -> (crate::charts::UnionFind, usize) {
         let graph = &self.graph;
         let mut is_cut = vec![false; graph.edges.len()];
         for e in &cut.edges {
@@ -511,7 +516,33 @@ impl<'a> ChartCutter<'a> {
                 pieces -= 1;
             }
         }
-        pieces
+        (uf, pieces)
+    }
+
+    /// The piece of every chart triangle after cutting along `cut` (the pieces
+    /// [`Self::pieces_after`] counts that hold a triangle, numbered from 0 in the order of
+    /// their first triangle), and their number: a cut into several pieces is predicted on the chart with the cut held
+    /// ([`Self::predicted_ratios_after`]; a piece's flattening with its outline's lengths kept
+    /// is the chart's with the cut's vertices held), the pieces told apart by these labels.
+    pub fn triangle_pieces(&self, cut: &ChartCuts) -> (Vec<u32>, usize) {
+        let (mut uf, _) = self.joined_after(cut);
+        let chart = self.chart;
+        let mut label_of = vec![u32::MAX; self.graph.polygons.len()];
+        let mut next = 0u32;
+        let labels = chart
+            .triangle_face
+            .iter()
+            .map(|f| {
+                // Graph polygons are the chart's faces, in order ([`graph::face_polygons`]).
+                let root = uf.find(chart.faces.binary_search(f).unwrap_or(0) as u32) as usize;
+                if label_of[root] == u32::MAX {
+                    label_of[root] = next;
+                    next += 1;
+                }
+                label_of[root]
+            })
+            .collect();
+        (labels, next as usize)
     }
 
     /// Cones and cut for this round (arguments as in [`cut_chart`]).

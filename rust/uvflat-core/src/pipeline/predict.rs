@@ -19,16 +19,22 @@
 //! [`PROGRESS`] of the best is not built on
 //! (as in repair: back to the best plan one cone at a time, then stop). At most
 //! [`PREDICTED_ROUNDS`] rounds; they stop early once the plan keeps the rule and its excess
-//! over the mean target is within [`NEAR_TARGET`] of the chart's area. A cut that leaves the
-//! chart in one piece (the usual one) is predicted without building the piece
-//! ([`crate::cuts::ChartCutter::pieces_after`], [`crate::cuts::ChartCutter::predicted_ratios_after`]).
+//! over the mean target is within [`NEAR_TARGET`] of the chart's area. A round's pieces are
+//! predicted without building them: the chart's flattening with the cut's vertices held is
+//! each piece's with its outline's lengths kept, one refactorization of the chart's system for
+//! every piece at once, the pieces told apart by their triangles' labels
+//! ([`crate::cuts::ChartCutter::triangle_pieces`], [`crate::cuts::ChartCutter::predicted_ratios_after`];
+//! a cut into two pieces cost 1.2–1.3 s at 220k–240k triangles with a system per piece, 0.45 s
+//! so).
 //!
 //! On a chart of [`crate::cuts::coarse::PROXY_FROM`] triangles or more, the cones and every
 //! round's prediction come from the chart's coarse proxy ([`crate::cuts::coarse`]: its
 //! factorization costs a few hundredths of a second where the chart's own costs about a second
 //! at 576k triangles), the cut from the chart; the proxy reads a little optimistic, so the best
-//! plan's rule and mean come from the chart's own system unless the proxy's reading is clear
-//! of both limits by [`PROXY_MARGIN`].
+//! plan's rule and mean come from the chart's own system ([`confirm`]) unless the proxy's
+//! reading is clear of both limits by [`PROXY_MARGIN`]. A proxy's mean above the split's limit
+//! is left unconfirmed (the chart's own is higher still, and the split comes first): the
+//! caller confirms it only when the chart is not split before any solve.
 //!
 //! The plan is the same whatever the method (the prediction does not depend on it), so the
 //! method's own solve, check and repair start from the same cuts: the seams differ between
@@ -37,8 +43,8 @@
 //! Deterministic: the cut, the regions and their order break ties by ids.
 
 use super::Context;
-use crate::charts::{build_charts_with, Chart};
-use crate::cuts::{cones::ScaleSolver, ChartCutter, ChartCuts};
+use crate::charts::Chart;
+use crate::cuts::{ChartCutter, ChartCuts};
 
 /// `(density ratio, 3D area)` per triangle.
 type Ratios = Vec<(f64, f64)>;
@@ -84,16 +90,16 @@ pub struct Plan {
     /// The predicted mean area distortion of that plan (area-weighted `max(r, 1/r)` over its
     /// pieces), `NaN` when a piece could not be predicted.
     pub mean_area: f64,
+    /// Whether `keeps_rule` and `mean_area` are the chart's proxy's reading (a little
+    /// optimistic), left for [`confirm`] to read on the chart's own system.
+    pub on_proxy: bool,
 }
 
-/// Plan the cones of `chart` (cut by `cutter`) from `seed` (see the module docs). `mask`: the
-/// chart's faces over the mesh; `base_seams`: the seams it is cut along already.
+/// Plan the cones of `chart` (cut by `cutter`) from `seed` (see the module docs).
 pub fn plan(
     ctx: &Context<'_, '_>,
     chart: &Chart,
     cutter: &ChartCutter<'_>,
-    base_seams: &[[u32; 2]],
-    mask: &[bool],
     seed: &[u32],
 ) -> Plan {
     let s = ctx.rule.max_stretch;
@@ -104,8 +110,7 @@ pub fn plan(
     let mut best_mean = f64::NAN;
     let mut single = false;
     let mut best_keeps_rule = false;
-    // Whether the best plan leaves the chart in one piece, and its predicted share outside.
-    let mut best_single = false;
+    // The best plan's largest predicted share outside of a piece.
     let mut best_outside = f64::NAN;
     let chart_area = super::chart_area(chart);
     for round in 0..=PREDICTED_ROUNDS {
@@ -113,16 +118,11 @@ pub fn plan(
             break;
         }
         let cut = cutter.plan_cut(&seeds, round);
-        // One piece (the usual cut) is predicted on the chart's own system with the cut held,
-        // without building it; several: each piece's own system.
-        let whole = cutter.pieces_after(&cut) == 1;
-        let pieces = if whole {
-            Vec::new()
-        } else {
-            let mut all: Vec<[u32; 2]> = base_seams.to_vec();
-            all.extend_from_slice(&cut.seams);
-            build_charts_with(ctx.mesh, &all, Some(mask), ctx.render)
-        };
+        // Every piece at once: the chart's flattening with the cut held (on its own system or
+        // its proxy's) is each piece's with its outline's lengths kept; the pieces are told
+        // apart by their triangles' labels.
+        let (labels, n_pieces) = cutter.triangle_pieces(&cut);
+        let pieces = by_piece(cutter.predicted_ratios_after(&cut), &labels, n_pieces);
         // Predicted excess area of every piece beyond the allowed share, and the crushed
         // regions of the worst one.
         let mut excess = 0.0;
@@ -132,46 +132,39 @@ pub fn plan(
         let mut mean_sum = 0.0;
         // The largest predicted share outside of a piece.
         let mut max_outside: f64 = 0.0;
-        let mut worst: Option<(f64, usize, Ratios)> = None;
-        let n_pieces = if whole { 1 } else { pieces.len() };
-        for k in 0..n_pieces {
-            let piece = if whole { chart } else { &pieces[k] };
-            let area = super::chart_area(piece);
-            let ratios = if whole {
-                cutter.predicted_ratios_after(&cut)
-            } else {
-                ScaleSolver::new(piece).and_then(|solver| crate::cuts::predicted_ratios(piece, &solver))
-            };
-            let predicted = ratios.map(|ratios| (crate::metrics::density::spread_of(ratios.clone(), s).outside, ratios));
-            let (over, soft, ratios) = match predicted {
-                Some((o, r)) => {
-                    let mean = mean_area(&r);
+        let mut worst: Option<(f64, usize)> = None;
+        for (k, ratios) in pieces.iter().enumerate() {
+            let (over, soft) = match ratios {
+                Some(r) => {
+                    let area: f64 = r.iter().map(|x| x.1).sum();
+                    let o = crate::metrics::density::spread_of(r.clone(), s).outside;
+                    let mean = mean_area(r);
                     max_outside = max_outside.max(o);
                     let soft = if mean.is_finite() { (mean - MEAN_AREA_TARGET).max(0.0) * area } else { area };
                     mean_sum += mean * area;
-                    ((o - super::rule::MAX_OUTSIDE_SHARE).max(0.0) * area, soft, r)
+                    ((o - super::rule::MAX_OUTSIDE_SHARE).max(0.0) * area, soft)
                 }
                 // Not a disk, or the system failed: the method's rounds will tell.
                 None => {
                     mean_sum = f64::NAN;
-                    (0.0, 0.0, Vec::new())
+                    (0.0, 0.0)
                 }
             };
             rule_excess += over;
             let over = over + soft;
             excess += over;
             if over > 0.0 && worst.as_ref().is_none_or(|w| over > w.0) {
-                worst = Some((over, k, ratios));
+                worst = Some((over, k));
             }
         }
         let next: Vec<u32> = worst
-            .map(|(_, k, ratios)| {
-                // Ratios of one piece come in the chart's triangle order.
-                let of = if whole { chart } else { &pieces[k] };
-                let regions = super::repair::crushed_regions(chart, of, &ratios, allowed, &cut.cones, s);
+            .map(|(_, k)| {
+                // The worst piece's ratios in the chart's triangle order (the others' at 1).
+                let ratios = in_chart_order(&pieces, &labels, k);
+                let regions = super::repair::crushed_regions(chart, chart, &ratios, allowed, &cut.cones, s);
                 if regions.is_empty() {
                     // Within the bound but above the mean target: the most crushed place.
-                    super::repair::crushed_regions(chart, of, &ratios, allowed, &cut.cones, 1.0)
+                    super::repair::crushed_regions(chart, chart, &ratios, allowed, &cut.cones, 1.0)
                         .into_iter()
                         .take(1)
                         .collect()
@@ -186,7 +179,6 @@ pub fn plan(
             best = Some((cut.clone(), excess, next.clone()));
             best_keeps_rule = rule_excess <= 0.0;
             best_mean = mean_sum / chart_area;
-            best_single = whole;
             best_outside = max_outside;
         }
         // Done when every piece is predicted to keep the rule and the mean area distortion
@@ -206,21 +198,90 @@ pub fn plan(
             break;
         }
     }
+    let Some((cut, _, _)) = best else {
+        return Plan { cut: None, keeps_rule: false, mean_area: f64::NAN, on_proxy: false };
+    };
     // Planned on the chart's proxy ([`crate::cuts::coarse`]), which reads a little optimistic:
     // the best plan's rule and mean, which decide the method's rounds and the split before
-    // any solve, come from the chart's own system (one factorization), unless the proxy's
-    // reading is clear of both limits by [`PROXY_MARGIN`].
+    // any solve, come from the chart's own system (one factorization, [`confirm`]), unless
+    // the proxy's reading is clear of both limits by [`PROXY_MARGIN`]. When the proxy reads a
+    // mean above [`super::repair::MEAN_AREA_LIMIT`] already, the chart's own is higher still
+    // and the split comes first: the caller confirms only if it keeps the chart whole.
     let unclear = best_outside + PROXY_MARGIN.0 > super::rule::MAX_OUTSIDE_SHARE
         || !(best_mean + PROXY_MARGIN.1 <= super::repair::MEAN_AREA_LIMIT);
-    if let Some((cut, _, _)) = best.as_ref().filter(|_| cutter.proxy().is_some() && best_single && unclear) {
-        if let Some(ratios) = cutter.predicted_ratios_on_chart(cut) {
-            best_mean = mean_area(&ratios);
-            let outside = crate::metrics::density::spread_of(ratios, s).outside;
-            best_keeps_rule = outside <= super::rule::MAX_OUTSIDE_SHARE;
-        }
+    let on_proxy = cutter.proxy().is_some() && unclear;
+    let mut plan = Plan { cut: Some(cut), keeps_rule: best_keeps_rule, mean_area: best_mean, on_proxy };
+    if on_proxy && !(best_mean > super::repair::MEAN_AREA_LIMIT) {
+        confirm(ctx, cutter, &mut plan);
     }
-    match best {
-        Some((cut, _, _)) => Plan { cut: Some(cut), keeps_rule: best_keeps_rule, mean_area: best_mean },
-        None => Plan { cut: None, keeps_rule: false, mean_area: f64::NAN },
+    plan
+}
+
+/// Read `plan`'s rule and mean on the chart's own system when they come from its proxy
+/// ([`Plan::on_proxy`]; one factorization of the chart), every piece of its cut at once.
+pub fn confirm(ctx: &Context<'_, '_>, cutter: &ChartCutter<'_>, plan: &mut Plan) {
+    let Some(cut) = plan.cut.as_ref().filter(|_| plan.on_proxy) else { return };
+    plan.on_proxy = false;
+    let (labels, n) = cutter.triangle_pieces(cut);
+    let pieces = by_piece(cutter.predicted_ratios_on_chart(cut), &labels, n);
+    if pieces.iter().any(Option::is_none) {
+        // Not predicted on the chart: the proxy's reading stands.
+        return;
     }
+    let (mut sum, mut total, mut keeps) = (0.0, 0.0, true);
+    for r in pieces.into_iter().flatten() {
+        let area: f64 = r.iter().map(|x| x.1).sum();
+        sum += mean_area(&r) * area;
+        total += area;
+        keeps &= crate::metrics::density::spread_of(r, ctx.rule.max_stretch).outside <= super::rule::MAX_OUTSIDE_SHARE;
+    }
+    plan.mean_area = sum / total;
+    plan.keeps_rule = keeps;
+}
+
+/// Per piece (`labels`: the piece of each chart triangle, `n` pieces), its triangles'
+/// `(density ratio, 3D area)` in triangle order, relative to the piece's own area-weighted
+/// mean (`None` without area); `all`: the chart's. One piece: the chart's as they are.
+fn by_piece(all: Option<Ratios>, labels: &[u32], n: usize) -> Vec<Option<Ratios>> {
+    let Some(all) = all else { return vec![None; n.max(1)] };
+    if n <= 1 {
+        return vec![Some(all)];
+    }
+    let mut out: Vec<Ratios> = vec![Vec::new(); n];
+    for (x, &l) in all.into_iter().zip(labels) {
+        out[l as usize].push(x);
+    }
+    out.into_iter()
+        .map(|mut r| {
+            let total: f64 = r.iter().map(|x| x.1).sum();
+            let mean = r.iter().map(|x| x.0 * x.1).sum::<f64>() / total;
+            (mean > 0.0 && mean.is_finite()).then(|| {
+                for x in &mut r {
+                    x.0 /= mean;
+                }
+                r
+            })
+        })
+        .collect()
+}
+
+/// Piece `k`'s ratios (from [`by_piece`]) in the chart's triangle order, the other pieces'
+/// triangles at ratio 1 (neither crushed nor stretched).
+fn in_chart_order(pieces: &[Option<Ratios>], labels: &[u32], k: usize) -> Ratios {
+    let Some(Some(mine)) = pieces.get(k) else { return Vec::new() };
+    if pieces.len() == 1 {
+        return mine.clone();
+    }
+    let mut at = 0;
+    labels
+        .iter()
+        .map(|&l| {
+            if l as usize == k {
+                at += 1;
+                mine[at - 1]
+            } else {
+                (1.0, 0.0)
+            }
+        })
+        .collect()
 }
