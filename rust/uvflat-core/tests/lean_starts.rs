@@ -2,8 +2,10 @@
 //! refinement on the Cholesky factorization of the system's symmetric part.
 //!
 //! Properties checked: the refinement converges on every test chart (holes, quads, pins) and
-//! gives the LU's map to 1e-9; the map is flip-free; large charts' barrier starts use it and
-//! still match the LU map, and SLIM from it never flips and never increases its energy. Also
+//! gives the LU's map to 1e-9; the map is flip-free; the start's looser solve
+//! ([`mean_value::solve_start`]) is flip-free and near the LU map; large charts' barrier
+//! starts use it with the LU map's energy, and SLIM from it never flips and never increases
+//! its energy. Also
 //! the staged choice of start ([`start::pick_staged`], which skips the mean value map when
 //! LSCM is near an isometry) against the choice among both candidates.
 
@@ -99,6 +101,22 @@ fn refinement_converges_to_the_lu_mean_value_map_without_flips() {
     }
 }
 
+/// The start's loose solve ([`mean_value::solve_start`]) on every test chart: flip-free, its
+/// outline clean and its quads convex (checked, else solved again to full accuracy), and the
+/// LU's map to the accuracy a start needs.
+#[test]
+fn the_start_solve_is_flip_free_and_near_the_lu_map() {
+    let charts = disk_charts();
+    for (name, chart) in &charts {
+        let lu = mean_value::solve(chart, &[], BoundaryShape::Circle).unwrap().uv;
+        let start = mean_value::solve_start(chart, &[]).unwrap().uv;
+        let d = max_difference(&lu, &start);
+        assert!(d < 1e-4, "{name}: start differs from the LU map by {d:e}");
+        assert!(least_area(chart, &start) > 0.0, "{name}: the start flips a triangle");
+        assert_eq!(uvflat_core::methods::nonconvex_quads(chart, &start), 0, "{name}: a quad is not convex");
+    }
+}
+
 #[test]
 fn refinement_honours_pins_like_the_lu_solve() {
     for (name, chart) in disk_charts().iter().take(4) {
@@ -126,9 +144,19 @@ fn large_charts_start_from_the_lean_map_and_slim_keeps_it_flip_free() {
     assert!(chart.triangles.len() >= start::SEQUENTIAL_STARTS_FROM, "{} triangles", chart.triangles.len());
     let lean = start::mean_value_start(&chart, &[]).unwrap().uv;
     let lu = mean_value::solve(&chart, &[], BoundaryShape::Circle).unwrap().uv;
+    // Solved to the start's accuracy ([`mean_value::START_TOLERANCE`]) on a unit circle: the
+    // map, and the energy the barrier methods start from, are the LU's to a few digits.
     let d = max_difference(&lu, &lean);
-    assert!(d < 1e-9, "large chart: start differs from the LU map by {d:e}");
+    assert!(d < 1e-5, "large chart: start differs from the LU map by {d:e}");
     assert!(least_area(&chart, &lean) > 0.0);
+    let ops = TriangleOperators::new(&chart.positions, &chart.triangles);
+    let energy = |uv: &[[f64; 2]]| {
+        let mut uv = uv.to_vec();
+        scale_optimally(&ops, &chart.triangles, &mut uv);
+        symmetric_dirichlet(&ops, &chart.triangles, &uv)
+    };
+    let (e_lean, e_lu) = (energy(&lean), energy(&lu));
+    assert!((e_lean - e_lu).abs() <= 1e-6 * e_lu, "start energy {e_lean} against the LU map's {e_lu}");
     let (sol, history) = slim::solve_with_history(&chart, &[], &SlimOptions { max_iterations: 3, ..Default::default() }).unwrap();
     assert!(sol.fallback.is_none());
     assert!(least_area(&chart, &sol.uv) > 0.0, "SLIM flipped a triangle");

@@ -14,7 +14,10 @@
 //! directions differ only by the ratio of the tangent sums at its two ends, so the
 //! preconditioned matrix is close to the identity: a few cycles on the meshes of the test
 //! set, camelhead's sliver triangles included (a plain preconditioned Richardson iteration
-//! stalls there). When it does not converge, the LU solve is used after all.
+//! stalls there). When it does not converge, the LU solve is used after all. The barrier
+//! methods' start takes [`solve_start`]: the same iteration to [`START_TOLERANCE`] (a start
+//! needs to be flip-free, not exact; the map is checked, and solved to full accuracy when the
+//! check fails).
 //!
 //! Preconditions: a disk chart (holes are filled virtually, see [`super::fixed_boundary`]).
 //! Failures: a singular system (disconnected chart) becomes a chart failure.
@@ -57,26 +60,48 @@ pub fn solve_lean(chart: &Chart, pins: &[(u32, [f64; 2])]) -> Result<ChartSoluti
     }
 }
 
+/// The iteration of [`solve_start`] stops when the residual is below this, relative to the
+/// right-hand side. On camelhead split to 363k triangles the first GMRES cycle ends at 6e-8–7e-8
+/// (from 1.7e-2 at the symmetric part's map), a second reaches 4e-13–5e-13; the start's
+/// symmetric Dirichlet energy is the same to seven digits (7.903355) and SLIM takes the same 7
+/// iterations to the same minimum (1.856991) from either, so the second cycle (2.3 s of the
+/// start's 6.0 s) bought nothing.
+pub const START_TOLERANCE: f64 = 1e-6;
+
+/// [`solve_lean`] to [`START_TOLERANCE`], for the starting map of the barrier methods (SLIM,
+/// scaffold, MIPS) on large charts: a start needs to be flip-free, not exact. The map is
+/// checked: when a triangle is not positively oriented, a boundary crosses itself or a quad is
+/// not convex (none of which the exact map has), it is solved again by [`solve_lean`].
+pub fn solve_start(chart: &Chart, pins: &[(u32, [f64; 2])]) -> Result<ChartSolution, ChartFailure> {
+    if let Ok(Some(sol)) = solve_refined(chart, pins, START_TOLERANCE) {
+        if super::lscm::folds(chart, &sol.uv) == (0, false) && super::nonconvex_quads(chart, &sol.uv) == 0 {
+            return Ok(sol);
+        }
+    }
+    solve_lean(chart, pins)
+}
+
 /// The iterative solve of [`solve_lean`] alone: `None` when it did not converge in
 /// [`MAX_REFINEMENTS`] GMRES restarts. Failures: a symmetric part that cannot be
 /// factored (disconnected chart).
 pub fn solve_by_refinement(chart: &Chart, pins: &[(u32, [f64; 2])]) -> Result<Option<ChartSolution>, ChartFailure> {
-    solve_refined(chart, pins).map_err(|e| ChartFailure(format!("mean value: {e}")))
+    solve_refined(chart, pins, REFINEMENT_TOLERANCE).map_err(|e| ChartFailure(format!("mean value: {e}")))
 }
 
-fn solve_refined(chart: &Chart, pins: &[(u32, [f64; 2])]) -> Result<Option<ChartSolution>, SolveError> {
+/// The map by GMRES to `tolerance` (relative residual), `None` when it did not converge.
+fn solve_refined(chart: &Chart, pins: &[(u32, [f64; 2])], tolerance: f64) -> Result<Option<ChartSolution>, SolveError> {
     let ext = fixed_boundary::fill_holes(chart);
     let n = ext.positions.len();
     let bnd = fixed_boundary::boundary_positions(&ext.positions, &ext.outer, BoundaryShape::Circle);
     let system = Refinement::new(n, fixed_boundary::laplacian_triplets_with_polygons(&ext.positions, &ext.triangles, &chart.polygons, Weights::MeanValue));
-    let Some(mut uv) = system.solve(&ext.outer, &bnd)? else {
+    let Some(mut uv) = system.solve(&ext.outer, &bnd, tolerance)? else {
         return Ok(None);
     };
     let mut sol = ChartSolution::direct(Vec::new());
     if !pins.is_empty() {
         // As `fixed_boundary::solve`: move the map onto the pins, then fix boundary and pins.
         let (fixed, vals) = super::fixed_boundary::onto_pins(&mut uv, &ext.outer, pins);
-        let Some(pinned) = system.solve(&fixed, &vals)? else {
+        let Some(pinned) = system.solve(&fixed, &vals, tolerance)? else {
             return Ok(None);
         };
         uv = pinned;
@@ -160,9 +185,9 @@ impl Refinement {
     ///
     /// Start: the symmetric part's solution. Then restarted GMRES (Saad & Schultz 1986) on the
     /// free unknowns, right-preconditioned by the symmetric part's Cholesky factorization,
-    /// until the true residual is below [`REFINEMENT_TOLERANCE`] relative to the right-hand
-    /// side (or stagnates below its square root).
-    fn solve(&self, fixed: &[u32], values: &[[f64; 2]]) -> Result<Option<Vec<[f64; 2]>>, SolveError> {
+    /// until the true residual is below `tolerance` relative to the right-hand side (or
+    /// stagnates below its square root).
+    fn solve(&self, fixed: &[u32], values: &[[f64; 2]], tolerance: f64) -> Result<Option<Vec<[f64; 2]>>, SolveError> {
         let n = self.n;
         // Factored once, solved on every GMRES step: AMD (see `solvers::ordering`).
         let s = FixedValueSolver::with_ordering(n, &self.symmetric_part(), fixed, Symmetry::Symmetric, OrderingKind::Amd)?;
@@ -183,7 +208,7 @@ impl Refinement {
             self.apply(&only_fixed, &is_fixed, &mut b);
             drop(only_fixed);
             let scale = b.iter().map(|v| v * v).sum::<f64>().sqrt();
-            if !self.gmres(&s, fixed.len(), &is_fixed, &mut xc, scale)? {
+            if !self.gmres(&s, fixed.len(), &is_fixed, &mut xc, scale, tolerance)? {
                 return Ok(None);
             }
             out.push(xc);
@@ -192,7 +217,7 @@ impl Refinement {
     }
 
     /// Restarted, right-preconditioned GMRES on `A_FF δ = −(A x)_F`, updating `x` in place.
-    fn gmres(&self, s: &FixedValueSolver, n_fixed: usize, is_fixed: &[bool], x: &mut [f64], scale: f64) -> Result<bool, SolveError> {
+    fn gmres(&self, s: &FixedValueSolver, n_fixed: usize, is_fixed: &[bool], x: &mut [f64], scale: f64, tolerance: f64) -> Result<bool, SolveError> {
         let n = self.n;
         let zeros = vec![vec![0.0; n_fixed]];
         let norm = |v: &[f64]| v.iter().map(|a| a * a).sum::<f64>().sqrt();
@@ -209,14 +234,14 @@ impl Refinement {
             if !beta.is_finite() {
                 return Ok(false);
             }
-            if beta <= REFINEMENT_TOLERANCE * scale || beta == 0.0 {
+            if beta <= tolerance * scale || beta == 0.0 {
                 return Ok(true);
             }
             // Stagnation at rounding level: accept below √tolerance, else give up.
             if beta > 0.5 * best {
                 stalled += 1;
                 if stalled >= 2 {
-                    return Ok(beta <= REFINEMENT_TOLERANCE.sqrt() * scale);
+                    return Ok(beta <= tolerance.sqrt() * scale);
                 }
             } else {
                 stalled = 0;
@@ -255,7 +280,7 @@ impl Refinement {
                 g.push(-sg * g[j]);
                 g[j] *= c;
                 h.push(col);
-                let done = g[j + 1].abs() <= 0.1 * REFINEMENT_TOLERANCE * scale || wn == 0.0;
+                let done = g[j + 1].abs() <= 0.1 * tolerance * scale || wn == 0.0;
                 if done || j + 1 == GMRES_RESTART {
                     break;
                 }

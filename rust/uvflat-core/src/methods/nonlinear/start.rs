@@ -32,12 +32,13 @@ pub const SEQUENTIAL_STARTS_FROM: usize = 100_000;
 const PARALLEL_STARTS_FROM: usize = 64;
 
 /// The mean value map on a circle honouring `start_pins`: on charts of at least
-/// [`SEQUENTIAL_STARTS_FROM`] triangles by [`mean_value::solve_lean`] (the same map without
-/// the general sparse LU, whose factors would set the method's peak memory), else by the LU
-/// solve of [`fixed_boundary::solve`].
+/// [`SEQUENTIAL_STARTS_FROM`] triangles by [`mean_value::solve_start`] (the same map without
+/// the general sparse LU, whose factors would set the method's peak memory, solved to the
+/// accuracy a start needs and checked flip-free), else by the LU solve of
+/// [`fixed_boundary::solve`].
 pub fn mean_value_start(chart: &Chart, start_pins: &[(u32, [f64; 2])]) -> Result<ChartSolution, ChartFailure> {
     if chart.triangles.len() >= SEQUENTIAL_STARTS_FROM {
-        mean_value::solve_lean(chart, start_pins)
+        mean_value::solve_start(chart, start_pins)
     } else {
         fixed_boundary::solve(chart, start_pins, BoundaryShape::Circle, Weights::MeanValue)
     }
