@@ -217,7 +217,15 @@ impl Refinement {
     }
 
     /// Restarted, right-preconditioned GMRES on `A_FF δ = −(A x)_F`, updating `x` in place.
-    fn gmres(&self, s: &FixedValueSolver, n_fixed: usize, is_fixed: &[bool], x: &mut [f64], scale: f64, tolerance: f64) -> Result<bool, SolveError> {
+    fn gmres(
+        &self,
+        s: &FixedValueSolver,
+        n_fixed: usize,
+        is_fixed: &[bool],
+        x: &mut [f64],
+        scale: f64,
+        tolerance: f64,
+    ) -> Result<bool, SolveError> {
         let n = self.n;
         let zeros = vec![vec![0.0; n_fixed]];
         let norm = |v: &[f64]| v.iter().map(|a| a * a).sum::<f64>().sqrt();
