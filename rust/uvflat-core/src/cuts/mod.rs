@@ -521,9 +521,10 @@ impl<'a> ChartCutter<'a> {
 
     /// The piece of every chart triangle after cutting along `cut` (the pieces
     /// [`Self::pieces_after`] counts that hold a triangle, numbered from 0 in the order of
-    /// their first triangle), and their number: a cut into several pieces is predicted on the chart with the cut held
-    /// ([`Self::predicted_ratios_after`]; a piece's flattening with its outline's lengths kept
-    /// is the chart's with the cut's vertices held), the pieces told apart by these labels.
+    /// their first triangle), and their number. A cut into several pieces is predicted on the
+    /// chart with the cut held ([`Self::predicted_ratios_after`]: a piece's flattening with
+    /// its outline's lengths kept is the chart's with the cut's vertices held), the pieces
+    /// told apart by these labels.
     pub fn triangle_pieces(&self, cut: &ChartCuts) -> (Vec<u32>, usize) {
         let (mut uf, _) = self.joined_after(cut);
         let chart = self.chart;

@@ -14,9 +14,9 @@
 //!    [`BAND_POLYGONS`] polygons, so it holds about that many). The seam is the minimum cut
 //!    of the band's dual graph ([`super::min_cut`]) with the cut cost of each edge as
 //!    capacity (the caller's costs: length, cheaper along creases, infinite on edges that
-//!    touch an avoided vertex): the cheapest loop (or path, on a chart with a boundary) that separates the two sides within
-//!    the band. A level set snapped to polygons would zig-zag across triangle strips; the cut
-//!    follows the straightest, cheapest edges near it instead.
+//!    touch an avoided vertex): the cheapest loop (or path, on a chart with a boundary) that
+//!    separates the two sides within the band. A level set snapped to polygons would zig-zag
+//!    across triangle strips; the cut follows the straightest, cheapest edges near it instead.
 //! 3. Among levels, one that leaves exactly two connected parts is preferred, then the least
 //!    `cost × (1 + |a − ½|)`, `a` the area share of one side (a mild preference for halves);
 //!    ties keep the earlier level.
