@@ -192,6 +192,26 @@ fn output_is_identical_across_runs_and_thread_counts() {
     assert_eq!(a.new_seams, b.new_seams);
 }
 
+/// Same output with one thread and two when a large chart's split halves go through the
+/// pipeline side by side (from `SEQUENTIAL_HALVES_FROM` triangles, under `abf`): the bunny
+/// subdivided twice (111,456 triangles), split before any solve.
+#[test]
+fn large_halves_side_by_side_give_the_same_output_as_in_turn() {
+    use uvflat_core::pipeline::repair::SEQUENTIAL_HALVES_FROM;
+    let Some(dir) = shared_meshes() else { return };
+    let s = common::subdivide(&common::subdivide(&load(&dir.join("bunny.off"))));
+    assert!(s.face_sizes.len() >= SEQUENTIAL_HALVES_FROM, "{} triangles", s.face_sizes.len());
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| unwrap(&s.input(), &UnwrapOptions::default()).unwrap())
+    };
+    let (a, b) = (run(1), run(2));
+    assert!(a.phases.splits >= 1, "the whole chart was not split: {:?}", a.phases);
+    assert_eq!(a.new_seams, b.new_seams);
+    assert_eq!(a.uv, b.uv);
+    check_rule("bunny subdivided twice", "abf", &s, &[], &b);
+}
+
 /// The shared meshes (closed and open): the rule on every island with abf and slim.
 #[test]
 fn every_island_keeps_the_rule_on_shared_meshes() {

@@ -287,13 +287,14 @@ fn halves(
         h.inherit_vertex_order(chart);
     }
     // Each half takes the pipeline's road again (cut, or solve then repair), the halves
-    // in parallel (in turn on a large chart, [`SEQUENTIAL_HALVES_FROM`]); results in
-    // half order, so the outcome does not depend on threads.
-    // The unwrap's progress goes with them, so a cancel reaches their solves.
+    // in parallel (in turn on a large chart under a method that balances area,
+    // [`SEQUENTIAL_HALVES_FROM`]); results in half order, so the outcome does not depend on
+    // threads. The unwrap's progress goes with them, so a cancel reaches their solves.
     let progress = crate::progress::current();
-    let lists: Vec<Vec<Piece>> = if chart.triangles.len() >= SEQUENTIAL_HALVES_FROM {
-        // Large halves one after the other: each solve's factorizations use every core
-        // already, and two at once raised the peak memory.
+    let in_turn = chart.triangles.len() >= SEQUENTIAL_HALVES_FROM && ctx.options.method.balances_area();
+    let lists: Vec<Vec<Piece>> = if in_turn {
+        // Large halves of SLIM, ARAP or scaffold one after the other: two of their solves
+        // at once raised the peak memory.
         halves.into_iter().map(|h| super::run(ctx, h, &all, depth + 1)).collect()
     } else {
         use rayon::prelude::*;
@@ -327,9 +328,17 @@ fn only_overlaps(ctx: &Context<'_, '_>, pieces: &[Piece]) -> bool {
 }
 
 /// A chart of at least this many triangles has its split's halves go through the pipeline
-/// one after the other (smaller ones in parallel). On fertility split 1→4 three times (576k
-/// triangles), `slim`'s halves of 231k and 344k triangles peaked at 1.71 GB solved in turn
-/// against 2.03 GB in parallel, in the same time (115.6 s and 118.9 s, one run each).
+/// one after the other under a method that balances area (SLIM, ARAP, scaffold; smaller
+/// charts, and every chart under the other methods, in parallel). On fertility split 1→4
+/// three times (576k triangles), `slim`'s halves of 231k and 344k triangles peaked at 1.71 GB
+/// solved in turn against 2.03 GB in parallel, in the same time (115.6 s and 118.9 s, one run
+/// each). The other methods' halves spend most of their time planning cuts, mostly on one
+/// thread, and their solves need less memory: `abf` on 3holes subdivided three times (460,800
+/// triangles, halves of 241k and 220k) took 10.7 s with its halves in parallel against 14.1 s
+/// in turn, at a peak of 0.93 GB against 0.64 GB (2.0 KB per triangle); on the bunny
+/// subdivided three times (445,824) 9.0 s against 11.4 s (1.03 GB against 0.91 GB); on
+/// fertility subdivided three times 10.3 s against 11.6 s at the same 1.10 GB (one run each,
+/// `examples/scan_phases.rs` on the meshes of `blender_scripts/scan_benchmark.py`).
 pub const SEQUENTIAL_HALVES_FROM: usize = 100_000;
 
 /// A chart of at least this many triangles whose only problem is an outline that crosses
