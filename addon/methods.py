@@ -431,6 +431,11 @@ def auto_seam_properties() -> dict[str, Any]:
             "How much dearer a seam is on exposed surface than in hidden places (ambient "
             "occlusion): higher hides seams more, 0 ignores visibility",
             soft_max=4.0, precision=2, step=10),
+        "same_seams": _from_spec(
+            "same_seams", "Same Seams",
+            "Plan the cuts of SLIM, ARAP and Scaffold as for the other methods, so switching "
+            "methods keeps the seams. Off: those three, which even out area, start from the "
+            "cone points alone and usually get fewer seams and islands"),
         "avoid_group": StringProperty(
             name="Avoid Seams",
             description="Vertex group where new seams must not go (e.g. the face); empty for "
@@ -520,6 +525,7 @@ def draw_settings(layout, props) -> None:
     sub.prop(props, "sharp_angle")
     col.prop(props, "symmetry")
     col.prop(props, "visibility_weight")
+    col.prop(props, "same_seams")
     obj = getattr(bpy.context, "active_object", None)
     if obj is not None and obj.type == "MESH":
         col.prop_search(props, "avoid_group", obj, "vertex_groups")

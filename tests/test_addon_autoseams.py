@@ -235,7 +235,7 @@ def test_auto_seam_properties_follow_the_core_table(ext, scene):
     layout = _PanelLayout()
     ext.methods.draw_settings(layout, scene.uvflat)
     assert {"auto_seams", "max_stretch", "max_cones", "symmetry", "visibility_weight",
-            "avoid_group"} <= set(layout.props)
+            "same_seams", "avoid_group"} <= set(layout.props)
 
 
 def _lopsided_sphere(name="Lopsided"):

@@ -173,7 +173,7 @@ def _stub_keywords(function):
 def test_auto_seam_options_are_declared_like_method_options():
     names = [s["name"] for s in uvflat.AUTO_SEAM_OPTIONS]
     assert names == ["auto_seams", "max_stretch", "max_cones", "avoid_vertices", "sharp_angle",
-                     "visibility_weight", "symmetry"]
+                     "visibility_weight", "symmetry", "same_seams"]
     method_keys = {k for specs in uvflat.METHOD_OPTIONS.values() for s in specs for k in s}
     for s in uvflat.AUTO_SEAM_OPTIONS:
         assert set(s) == method_keys and s["doc"], s
@@ -232,6 +232,8 @@ def test_auto_seam_declared_values_are_accepted_and_bounds_refused():
         ({"visibility_weight": float("nan")}, "visibility_weight"),
         ({"visibility_weight": "a"}, "visibility_weight"),
         ({"visibility_weight": True}, "visibility_weight"),
+        ({"same_seams": 1}, "same_seams"),
+        ({"same_seams": "yes"}, "same_seams"),
     ],
 )
 @pytest.mark.parametrize("function", [uvflat.unwrap, uvflat.plan_seams])
@@ -322,3 +324,33 @@ def test_visibility_weight_moves_seams_into_hidden_places_and_keeps_the_rule():
     # weighing exposure puts more of the seams inside the pocket than ignoring it
     assert share[1.0] > share[0.0] + 0.05, share
     assert share[100.0] > share[0.0] + 0.05, share
+
+
+def five_armed_sphere(n_lon=64, n_lat=32):
+    """A UV sphere pulled out into five arms around its equator: its conformal flattening
+    crushes the arms, so the plan of the cuts needs more cones than the methods that even out
+    area would add by themselves."""
+    pos, cv, fs = uv_sphere(n_lon, n_lat)
+    pos = np.array(pos, dtype=float)
+    lon = np.arctan2(pos[:, 1], pos[:, 0])
+    scale = 1 + 2.0 * np.maximum(0, np.cos(5 * lon)) ** 4 * np.linalg.norm(pos[:, :2], axis=1)
+    pos[:, :2] *= scale[:, None]
+    return pos, cv, fs
+
+
+def test_same_seams_gives_the_area_balancing_methods_one_plan_and_off_their_own():
+    pos, cv, fs = five_armed_sphere()
+    planned = {m: uvflat.plan_seams(pos, cv, fs, method=m, same_seams=True)
+               for m in ("slim", "arap", "scaffold")}
+    assert len(planned["slim"]) > 0
+    assert np.array_equal(planned["slim"], planned["arap"])
+    assert np.array_equal(planned["slim"], planned["scaffold"])
+    own = uvflat.plan_seams(pos, cv, fs, method="slim")  # off by default
+    assert len(own) < len(planned["slim"]), (len(own), len(planned["slim"]))
+    # unwrap adds exactly the seams plan_seams gives, and keeps the rule on every island
+    r = uvflat.unwrap(pos, cv, fs, method="slim", same_seams=True)
+    assert np.array_equal(r.new_seams, planned["slim"])
+    assert_atlas_rule(pos, cv, fs, r)
+    r = uvflat.unwrap(pos, cv, fs, method="slim", same_seams=False)
+    assert np.array_equal(r.new_seams, own)
+    assert_atlas_rule(pos, cv, fs, r)

@@ -212,6 +212,45 @@ fn large_halves_side_by_side_give_the_same_output_as_in_turn() {
     check_rule("bunny subdivided twice", "abf", &s, &[], &b);
 }
 
+/// With `same_seams` on, every method's cuts are planned on the method-independent
+/// prediction, so the methods that keep the rule on the plan get exactly the same seams
+/// (`abf`, which balances angles, and `slim`, `arap` and `scaffold`, which even out area). Off
+/// (the default), `slim` starts from the cutter's cones alone and gets fewer seams of its own.
+#[test]
+fn the_methods_get_the_same_seams_with_same_seams_on() {
+    let Some(dir) = shared_meshes() else { return };
+    let cases: [(&str, Vec<Method>); 2] = [
+        ("bunny.off", vec![Method::Slim(Default::default()), Method::Scaffold(Default::default())]),
+        (
+            "decimated-max.obj",
+            vec![
+                Method::Slim(Default::default()),
+                Method::Arap(Default::default()),
+                Method::Scaffold(Default::default()),
+            ],
+        ),
+    ];
+    for (name, others) in cases {
+        let s = load(&dir.join(name));
+        let run = |method: &Method, same_seams: bool| {
+            let mut o = UnwrapOptions { method: method.clone(), ..Default::default() };
+            o.auto_seams.same_seams = same_seams;
+            let r = unwrap(&s.input(), &o).unwrap();
+            check_rule(name, method.name(), &s, &[], &r);
+            r.new_seams
+        };
+        let abf = run(&Method::Abf(Default::default()), true);
+        assert!(!abf.is_empty(), "{name}: nothing was cut");
+        for m in &others {
+            assert_eq!(run(m, true), abf, "{name} / {}: not the seams of abf", m.name());
+        }
+        let own = run(&others[0], false);
+        let default = unwrap(&s.input(), &UnwrapOptions { method: others[0].clone(), ..Default::default() }).unwrap();
+        assert_eq!(default.new_seams, own, "{name}: same_seams is not off by default");
+        assert!(own.len() < abf.len(), "{name}: slim's own seams {} against the plan's {}", own.len(), abf.len());
+    }
+}
+
 /// The shared meshes (closed and open): the rule on every island with abf and slim.
 #[test]
 fn every_island_keeps_the_rule_on_shared_meshes() {

@@ -109,7 +109,16 @@ fn auto_seam_declared_names_are_the_fields() {
     let names: Vec<&str> = auto_seam_options().iter().map(|o| o.name).collect();
     assert_eq!(
         names,
-        ["auto_seams", "max_stretch", "max_cones", "avoid_vertices", "sharp_angle", "visibility_weight", "symmetry"]
+        [
+            "auto_seams",
+            "max_stretch",
+            "max_cones",
+            "avoid_vertices",
+            "sharp_angle",
+            "visibility_weight",
+            "symmetry",
+            "same_seams"
+        ]
     );
     assert!(auto_seam_options().iter().all(|o| !o.doc.is_empty()));
     assert_eq!(option_name(AutoSeamOptions::parse(&[("no_such".into(), OptionValue::Int(1))]).unwrap_err()), "no_such");
@@ -164,7 +173,14 @@ fn auto_seam_declared_ranges_are_what_validate_keeps() {
                 refused(OptionValue::Int(0));
             }
             OptionKind::Bool => {
-                assert!(!ok(OptionValue::Bool(false)).enabled);
+                let field = |a: &AutoSeamOptions| match o.name {
+                    "auto_seams" => a.enabled,
+                    "same_seams" => a.same_seams,
+                    other => panic!("{other}: a boolean option this test does not know"),
+                };
+                for v in [false, true] {
+                    assert_eq!(field(&ok(OptionValue::Bool(v))), v, "{}", o.name);
+                }
                 refused(OptionValue::Int(1));
             }
             OptionKind::Vertices => {

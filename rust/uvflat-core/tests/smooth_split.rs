@@ -245,7 +245,7 @@ fn a_split_on_the_proxy_fiedler_vector_is_a_loop_around_the_tube() {
     let options = AutoSeamOptions::default();
     let proxy = cuts::coarse::Proxy::with_target(&chart, chart.positions.len() / 4).unwrap();
     let cutter = cuts::ChartCutter::new(&mesh, &chart, &options, &avoid).with_proxy(proxy);
-    let seams = cutter.split_candidates(&avoid).remove(0);
+    let seams = cutter.split_candidates(&avoid, false).remove(0);
     // One loop: every seam vertex has two seam edges, and the seam is connected.
     let mut degree = std::collections::BTreeMap::<u32, usize>::new();
     let mut length = 0.0;

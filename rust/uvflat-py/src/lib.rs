@@ -329,7 +329,8 @@ fn read_triangles(py: Python<'_>, triangles: Option<&Bound<'_, PyAny>>, n_corner
 #[pyo3(signature = (positions, corner_verts, face_sizes, *, method = None, seams = None, selected = None,
                     pins = None, pin_uvs = None, fit_to = None, triangles = None, auto_seams = None,
                     max_stretch = None, max_cones = None, avoid_vertices = None, sharp_angle = None,
-                    visibility_weight = None, symmetry = None, progress = None, **options))]
+                    visibility_weight = None, symmetry = None, same_seams = None, progress = None,
+                    **options))]
 #[allow(clippy::too_many_arguments)]
 fn unwrap(
     py: Python<'_>,
@@ -350,6 +351,7 @@ fn unwrap(
     sharp_angle: Option<&Bound<'_, PyAny>>,
     visibility_weight: Option<&Bound<'_, PyAny>>,
     symmetry: Option<&Bound<'_, PyAny>>,
+    same_seams: Option<&Bound<'_, PyAny>>,
     progress: Option<&Bound<'_, PyAny>>,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PyUnwrapResult> {
@@ -404,6 +406,7 @@ fn unwrap(
         ("sharp_angle", sharp_angle),
         ("visibility_weight", visibility_weight),
         ("symmetry", symmetry),
+        ("same_seams", same_seams),
     ];
     let auto_seams = read_auto_seams(py, &given, n_vertices)?;
     let method_name = method.name().to_string();

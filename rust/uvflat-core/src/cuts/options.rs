@@ -55,6 +55,12 @@ const AUTO_SEAMS: &[OptionSpec] = &[
         default: OptionDefault::Str("none"),
         doc: "mirror plane the seams keep on a mirror-symmetric island (x, y, z: across that axis through its centre; auto: a principal axis)",
     },
+    OptionSpec {
+        name: "same_seams",
+        kind: OptionKind::Bool,
+        default: OptionDefault::Bool(false),
+        doc: "plan the cuts of slim, arap and scaffold on the prediction the other methods use, so switching methods keeps the seams (off: they start from the cones alone and usually get fewer seams and islands)",
+    },
 ];
 
 /// The options of automatic seams, in the order front ends show them.
@@ -118,6 +124,10 @@ impl AutoSeamOptions {
             },
             "sharp_angle" => self.sharp_angle = Some(number(name, value)?),
             "visibility_weight" => self.visibility_weight = number(name, value)?,
+            "same_seams" => match value {
+                OptionValue::Bool(b) => self.same_seams = *b,
+                other => return Err(opt_err(name, format!("expected a boolean, got {}", describe(other)))),
+            },
             "symmetry" => match value {
                 OptionValue::Str(s) => self.symmetry = Symmetry::parse(s).map_err(|e| opt_err(name, e.to_string()))?,
                 other => {

@@ -87,17 +87,20 @@ pub fn halve(graph: &ChartGraph, cost: &[f64], chart: &Chart, avoid: &[bool]) ->
 /// planar one (when it differs); empty seam lists are left out. The pipeline tries the second
 /// when the halves of the first do not keep the atlas rule.
 pub fn candidates(graph: &ChartGraph, cost: &[f64], chart: &Chart, avoid: &[bool]) -> Vec<Vec<[u32; 2]>> {
-    candidates_with(graph, cost, chart, avoid, None)
+    candidates_with(graph, cost, chart, avoid, None, true)
 }
 
 /// [`candidates`] with the chart's Fiedler vector given (`None`: computed here), as a large
-/// chart reads it from its coarse proxy ([`super::ChartCutter::split_candidates`]).
+/// chart reads it from its coarse proxy ([`super::ChartCutter::split_candidates`]). With
+/// `all` false, only the first candidate: the planar split is not made when the spectral one
+/// exists.
 pub fn candidates_with(
     graph: &ChartGraph,
     cost: &[f64],
     chart: &Chart,
     avoid: &[bool],
     fiedler: Option<Vec<f64>>,
+    all: bool,
 ) -> Vec<Vec<[u32; 2]>> {
     let mut out = Vec::new();
     if graph.polygons.len() < 2 {
@@ -109,6 +112,9 @@ pub fn candidates_with(
     };
     if let Some(split) = split {
         out.push(split.seams);
+        if !all {
+            return out;
+        }
     }
     let mut planar = halve_planar(graph, chart, avoid);
     planar.sort_unstable();

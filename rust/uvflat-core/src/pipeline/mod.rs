@@ -10,13 +10,15 @@
 //!    holes are cut first; disks are solved as they are and repaired only if they break the
 //!    rule; pinned disks and charts with a defect are never cut. With automatic seams off
 //!    every chart is solved as it is.
-//!    A disk solved by a method that does not balance area is cut first when its predicted
-//!    flattening ([`crate::cuts::predicted_outside`]) breaks Max Stretch by far.
+//!    A disk is cut first when its predicted flattening ([`crate::cuts::predicted_outside`])
+//!    breaks Max Stretch by far (under a method that balances area, only with
+//!    [`crate::cuts::AutoSeamOptions::same_seams`]).
 //! 2. Plan cuts: [`crate::cuts::ChartCutter`] (cones on the conformal scale factor, handle
 //!    loops, holes and cones joined to the outline by a Steiner tree of low-cost edges), and
 //!    [`predict::plan`]: more cones while the predicted flattening of a piece breaks Max
-//!    Stretch, one factorization per round instead of a solve (methods that balance area
-//!    start from the cutter's cones as they are).
+//!    Stretch, one factorization per round instead of a solve. The plan does not depend on the
+//!    method; methods that balance area start from the cutter's cones as they are unless
+//!    [`crate::cuts::AutoSeamOptions::same_seams`] is on.
 //! 3. Solve: [`solve::solve_chart`] maps a piece with the user's method, places and measures
 //!    it.
 //! 4. Check: [`rule::AtlasRule`] (a disk, no flips, an outline that does not cross itself,
@@ -69,6 +71,15 @@ pub struct Context<'a, 'm> {
     pub clock: phases::PhaseClock,
     /// Occlusion rays cast so far, per corner (a chart's pieces reuse its rays).
     pub visibility: crate::cuts::visibility::VisibilityCache,
+}
+
+impl Context<'_, '_> {
+    /// Whether cuts are planned on the prediction ([`predict::plan`]): always, unless
+    /// [`crate::cuts::AutoSeamOptions::same_seams`] is off and the method balances area (SLIM,
+    /// ARAP, scaffold), which then starts from the cutter's cones as they are.
+    pub fn plans_on_prediction(&self) -> bool {
+        self.options.auto_seams.same_seams || !self.options.method.balances_area()
+    }
 }
 
 /// One solved piece of the output: an input chart as built, or a piece of it made by cuts.
@@ -139,7 +150,7 @@ fn road(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], depth: us
     }
     // The scale system of the prediction, kept for the cutter if the disk is cut.
     let mut solver = None;
-    if road == Triage::SolveThenRepair && !ctx.options.method.balances_area() {
+    if road == Triage::SolveThenRepair && ctx.plans_on_prediction() {
         // A disk whose conformal flattening is predicted to break Max Stretch by far is cut
         // before any solve (the solve as it is would be thrown away). Only the scale system
         // is built here: the cutter's graph, costs and occlusion rays wait until a cut is due.

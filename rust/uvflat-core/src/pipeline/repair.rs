@@ -3,8 +3,10 @@
 //! Precedents: xatlas's piecewise parameterization and PartUV's split-until-valid. Round 0
 //! cuts the chart as planned by [`crate::cuts::ChartCutter`] (cones on the scale factor, handle
 //! loops, holes joined to the outline), with the cones [`super::predict::plan`] added where the
-//! predicted flattening breaks Max Stretch (for methods that do not balance area; when the
-//! prediction cannot keep the rule, round 0 is the only round before the split); each further
+//! predicted flattening breaks Max Stretch (for methods that do not balance area, and for
+//! those that do with `same_seams` on; when the prediction cannot keep the rule, round 0 is
+//! the only round before the split, except under a method that balances area, which often
+//! keeps the rule where the conformal prediction breaks it); each further
 //! round adds a cone in each of the
 //! largest crushed regions of the first piece that breaks the rule (up to
 //! `CONES_PER_ROUND`; a flip or zero-area triangle counts as crushed), and re-cuts. A round
@@ -85,9 +87,10 @@ pub fn repair<'a>(
     let mut single = false;
     // The cones planned on the prediction ([`super::predict`]); when the prediction could not
     // keep the rule, more cones will not either: one solve of the best plan, then the split.
-    // Methods that balance area (SLIM, ARAP, scaffold) often keep the rule where the
-    // conformal prediction breaks it: they start from the cutter's cones as they are.
-    let mut plan = if ctx.options.method.balances_area() {
+    // Unless `same_seams` is on, methods that balance area (SLIM, ARAP, scaffold), which
+    // often keep the rule where the conformal prediction breaks it, start from the cutter's
+    // cones as they are.
+    let mut plan = if !ctx.plans_on_prediction() {
         None
     } else {
         let t = std::time::Instant::now();
@@ -97,7 +100,9 @@ pub fn repair<'a>(
     };
     let predicted_mean = plan.as_ref().map_or(f64::NAN, |p| p.mean_area);
     // The split's candidates, once made, and the halves along the first made before any solve.
+    // Only the last split level tries more than the first candidate.
     let mut candidates: Option<Vec<Vec<[u32; 2]>>> = None;
+    let last_level = depth + 1 == cuts::MAX_SPLIT_DEPTH;
     let mut presplit: Option<(Vec<[u32; 2]>, Vec<Piece>)> = None;
     if predicted_mean > MEAN_AREA_LIMIT && depth < cuts::MAX_SPLIT_DEPTH && chart.faces.len() >= 2 {
         // The plan's predicted mean area distortion is above [`MEAN_AREA_LIMIT`]: the chart
@@ -110,7 +115,7 @@ pub fn repair<'a>(
         // with a mean above the limit, the bunny subdivided twice as the Rust examples make
         // it: its whole-chart solve, 1.2 s, was solved to be split.)
         let t = std::time::Instant::now();
-        let list = cutter.split_candidates(ctx.avoid);
+        let list = cutter.split_candidates(ctx.avoid, last_level);
         // The halves make their own cutting state; a later round factors this one again.
         cutter.release_factors();
         ctx.clock.add(|p| p.plan_cuts += t.elapsed().as_secs_f64());
@@ -130,7 +135,13 @@ pub fn repair<'a>(
         super::predict::confirm(ctx, &cutter, plan);
         ctx.clock.add(|p| p.plan_cuts += t.elapsed().as_secs_f64());
     }
-    let rounds = plan.as_ref().map_or(cuts::REPAIR_ROUNDS, |p| if p.keeps_rule { cuts::REPAIR_ROUNDS } else { 0 });
+    let rounds = plan.as_ref().map_or(cuts::REPAIR_ROUNDS, |p| {
+        if p.keeps_rule || ctx.options.method.balances_area() {
+            cuts::REPAIR_ROUNDS
+        } else {
+            0
+        }
+    });
     let mut planned = plan.and_then(|p| p.cut);
     for round in 0..=rounds {
         if crate::progress::cancelled() {
@@ -241,12 +252,12 @@ pub fn repair<'a>(
         // attempt per chart of that level, so the work stays bounded).
         let t = std::time::Instant::now();
         let candidates =
-            candidates.take().unwrap_or_else(|| cutter.split_candidates(ctx.avoid));
+            candidates.take().unwrap_or_else(|| cutter.split_candidates(ctx.avoid, last_level));
         // The chart's cutting state (its graph, costs and the scale system's factor: 0.3 GB
         // on a 576k-triangle chart) is not needed by the halves, which make their own.
         drop(cutter);
         ctx.clock.add(|p| p.plan_cuts += t.elapsed().as_secs_f64());
-        let tries = if depth + 1 == cuts::MAX_SPLIT_DEPTH { candidates.len() } else { 1 };
+        let tries = if last_level { candidates.len() } else { 1 };
         for split in candidates.into_iter().take(tries).filter(|s| !s.is_empty()) {
             let out = match presplit.take() {
                 Some((seams, out)) if seams == split => out,

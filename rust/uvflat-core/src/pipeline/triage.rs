@@ -28,8 +28,9 @@ pub fn triage(chart: &Chart, auto_seams: bool, pinned: bool) -> Triage {
     }
 }
 
-/// A disk solved by a method that does not balance area
-/// ([`crate::Method::balances_area`]) is cut before any solve when the conformal flattening
+/// A disk solved by a method planned on the prediction (one that does not balance area,
+/// [`crate::Method::balances_area`], or any with `same_seams` on:
+/// [`super::Context::plans_on_prediction`]) is cut before any solve when the conformal flattening
 /// that keeps its outline's lengths ([`crate::cuts::predicted_outside`]) leaves
 /// more than this share of its area outside Max Stretch: three times what the rule allows
 /// ([`super::rule::MAX_OUTSIDE_SHARE`]), so a chart near the bound is still solved as it is.

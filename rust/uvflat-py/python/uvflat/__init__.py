@@ -75,7 +75,7 @@ __all__ = [
 def unwrap(positions, corner_verts, face_sizes, *, method="abf", seams=None, selected=None,
            pins=None, pin_uvs=None, fit_to=None, triangles=None, auto_seams=True, max_stretch=2.0,
            max_cones=8, avoid_vertices=None, sharp_angle=None, visibility_weight=1.0,
-           symmetry="none", progress=None, **options):
+           symmetry="none", same_seams=False, progress=None, **options):
     """Unwrap the selected faces of a polygon mesh into per-corner UVs.
 
     The selection is split into charts along seams, non-manifold edges (counted in
@@ -130,6 +130,11 @@ def unwrap(positions, corner_verts, face_sizes, *, method="abf", seams=None, sel
             cones are mirrored, and a closed chart without handles is cut on one half and the
             cut mirrored, so its seams map onto themselves (a last-resort split is not); a
             chart that is not symmetric about the plane is cut as without it.
+        same_seams: plan the cuts of ``slim``, ``arap`` and ``scaffold`` on the same
+            method-independent prediction as the other methods (default False), so switching
+            methods keeps the seams wherever the new method keeps the rule on them (a method
+            that breaks it there re-cuts through the plan's cones and its own). Off, those
+            three start from the cones alone and usually get fewer seams and islands.
         progress: ``callable(charts_done, charts_total)``, called from the worker threads
             with the GIL held, at most every 0.1 s and once after the last chart; returning
             a false value (``False``, ``0``, ``numpy.False_``; ``None`` goes on) cancels the
@@ -176,13 +181,14 @@ def unwrap(positions, corner_verts, face_sizes, *, method="abf", seams=None, sel
                           triangles=triangles, auto_seams=auto_seams, max_stretch=max_stretch, max_cones=max_cones,
                           avoid_vertices=avoid_vertices, sharp_angle=sharp_angle,
                           visibility_weight=visibility_weight, symmetry=symmetry,
-                          progress=progress, **options)
+                          same_seams=same_seams, progress=progress, **options)
 
 
 def plan_seams(positions, corner_verts, face_sizes, *, method="abf", seams=None, selected=None,
                pins=None, pin_uvs=None, fit_to=None, triangles=None, auto_seams=True,
                max_stretch=2.0, max_cones=8, avoid_vertices=None, sharp_angle=None,
-               visibility_weight=1.0, symmetry="none", progress=None, **options):
+               visibility_weight=1.0, symmetry="none", same_seams=False, progress=None,
+               **options):
     """The seams :func:`unwrap` would add with the same arguments, without any UVs: review and
     edit them, then unwrap with them as ``seams``.
 
@@ -198,4 +204,5 @@ def plan_seams(positions, corner_verts, face_sizes, *, method="abf", seams=None,
                           triangles=triangles, auto_seams=auto_seams, max_stretch=max_stretch,
                           max_cones=max_cones, avoid_vertices=avoid_vertices,
                           sharp_angle=sharp_angle, visibility_weight=visibility_weight,
-                          symmetry=symmetry, progress=progress, **options).new_seams
+                          symmetry=symmetry, same_seams=same_seams, progress=progress,
+                          **options).new_seams

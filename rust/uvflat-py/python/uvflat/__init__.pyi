@@ -40,7 +40,7 @@ The single source the add-on, the batch script and this stub are tested against.
 AUTO_SEAM_OPTIONS: Final[tuple[OptionSpec, ...]]
 """The automatic-seams keywords of :func:`unwrap` and :func:`plan_seams` as the core declares
 them (``auto_seams``, ``max_stretch``, ``max_cones``, ``avoid_vertices``, ``sharp_angle``,
-``visibility_weight``, ``symmetry``), in the order front ends show them."""
+``visibility_weight``, ``symmetry``, ``same_seams``), in the order front ends show them."""
 
 Symmetry = Literal["none", "x", "y", "z", "auto"]
 """Mirror planes automatic seams can keep (``unwrap(symmetry=...)``)."""
@@ -300,6 +300,7 @@ def unwrap(
     sharp_angle: float | None = None,
     visibility_weight: float = 1.0,
     symmetry: Symmetry = "none",
+    same_seams: bool = False,
     progress: Callable[[int, int], bool | None] | None = None,
     **options: Unpack[UnwrapOptions],
 ) -> UnwrapResult:
@@ -362,6 +363,10 @@ def unwrap(
             its own mirror image cut costs and cones are mirrored, and a closed chart without
             handles is cut on one half and the cut mirrored, so its seams map onto themselves
             (a last-resort split is not); other charts are cut as without it.
+        same_seams: plan the cuts of "slim", "arap" and "scaffold" on the same
+            method-independent prediction as the other methods (default False), so switching
+            methods keeps the seams wherever the new method keeps the rule on them. Off, those
+            three start from the cones alone and usually get fewer seams and islands.
 
     Raises:
         InputError: wrong shape, dtype or length; a non-finite ``fit_to`` UV.
@@ -444,6 +449,7 @@ def plan_seams(
     sharp_angle: float | None = None,
     visibility_weight: float = 1.0,
     symmetry: Symmetry = "none",
+    same_seams: bool = False,
     progress: Callable[[int, int], bool | None] | None = None,
     **options: Unpack[UnwrapOptions],
 ) -> npt.NDArray[np.uint32]:
