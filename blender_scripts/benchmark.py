@@ -178,11 +178,28 @@ def run_once(obj, kind, method):
 
 
 def measure(uvflat, mesh_io, obj, kind, method, repeat):
+    """One table row: ``repeat`` timed runs of one method on ``obj``, each from the mesh's own
+    seams and UVs at the origin, and the quality of the last. The mesh's seams are as they
+    were when it returns (an unwrap with automatic seams marks its cuts, which the next
+    method would take as given)."""
+    _, own_seams = mesh_io.read_edges(obj.data)
+    try:
+        return _measure(uvflat, mesh_io, obj, kind, method, repeat, own_seams)
+    finally:
+        mesh_io.write_seams(obj.data, own_seams)
+
+
+def _measure(uvflat, mesh_io, obj, kind, method, repeat, own_seams):
     mesh = obj.data
     positions, corner_verts, face_sizes = mesh_io.read_topology(mesh)
     times, error, phases = [], None, []
+    # the add-on whose mesh_io this is (its engine keeps the last unwrap's summary)
+    addon = sys.modules[mesh_io.__name__.rpartition(".")[0]]
     for _ in range(repeat):
-        # start from the same state every time: all UVs at the origin
+        # start from the same state every time: the mesh's own seams (an unwrap with automatic
+        # seams marks its cuts, which a later run or method would take as given and cut
+        # nothing) and all UVs at the origin
+        mesh_io.write_seams(mesh, own_seams)
         mesh_io.write_uv(mesh, mesh_io.ensure_uv_map(mesh)[0],
                          np.zeros((len(corner_verts), 2), dtype=np.float32))
         seconds, error = run_once(obj, kind, method)
@@ -190,7 +207,7 @@ def measure(uvflat, mesh_io, obj, kind, method, repeat):
             break
         times.append(seconds)
         if kind == "uvflat":
-            summary = sys.modules[common.ADDON_MODULE].engine.LAST_SUMMARY
+            summary = addon.engine.LAST_SUMMARY
             ph = dict(getattr(summary, "phases", None) or {})
             # the operator call's own overhead (outside the engine's run) is "other" too
             ph["other"] = ph.get("other", 0.0) + max(0.0, seconds - sum(ph.values()))
@@ -211,7 +228,7 @@ def measure(uvflat, mesh_io, obj, kind, method, repeat):
     except uvflat.UvflatError as ex:
         row["metrics_error"] = str(ex)
     if kind == "uvflat":
-        summary = sys.modules[common.ADDON_MODULE].engine.LAST_SUMMARY
+        summary = addon.engine.LAST_SUMMARY
         if summary is not None and summary.failed:
             row["note"] = f"{len(summary.failed)} chart(s) failed: {summary.failed[0].reason}"
         try:

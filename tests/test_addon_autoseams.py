@@ -279,3 +279,41 @@ def test_symmetry_marks_mirrored_seams(ext, scene):
     planned = uvflat.plan_seams(before.positions, before.corner_verts, before.face_sizes,
                                 method="abf", triangles=tris, symmetry="x", visibility_weight=0.0)
     assert marked == {tuple(map(int, s)) for s in planned} and mirrored(marked, image) == marked
+
+
+def test_benchmark_starts_every_run_from_the_mesh_s_own_seams(ext, scene, monkeypatch):
+    """``blender_scripts/benchmark.py`` times the operator on the same mesh with the same seams:
+    an unwrap with automatic seams marks its cuts (Mark Seams), and a later run or method that
+    took them as given would cut nothing and time another job. Each run starts from the
+    mesh's own seams again (the operator really marks new ones), and a row leaves them so."""
+    import sys
+
+    import uvflat
+
+    sys.path.insert(0, str(common.REPO / "blender_scripts"))
+    import benchmark
+
+    obj = _sphere("BenchSphere")
+    mesh_io = ext.mesh_io
+    seen = []
+    run_once = benchmark.run_once
+
+    def recording(o, kind, method):
+        seen.append(len(mesh_io.read_seams(o.data)))
+        return run_once(o, kind, method)
+
+    marked = []
+
+    def marking(o, kind, method):
+        out = recording(o, kind, method)
+        marked.append(len(mesh_io.read_seams(o.data)))
+        return out
+
+    monkeypatch.setattr(benchmark, "run_once", marking)
+    for method in ("abf", "lscm"):
+        row = benchmark.measure(uvflat, mesh_io, obj, "uvflat", method, 2)
+        assert row["error"] is None, row
+        assert row["flips"] == 0 and row["unsolved"] == 0
+        assert len(mesh_io.read_seams(obj.data)) == 0, f"{method}: the row left its seams"
+    assert seen == [0, 0, 0, 0]
+    assert all(m > 0 for m in marked), f"an unwrap marked no seams: {marked}"
