@@ -317,3 +317,28 @@ def test_benchmark_starts_every_run_from_the_mesh_s_own_seams(ext, scene, monkey
         assert len(mesh_io.read_seams(obj.data)) == 0, f"{method}: the row left its seams"
     assert seen == [0, 0, 0, 0]
     assert all(m > 0 for m in marked), f"an unwrap marked no seams: {marked}"
+
+
+def test_same_seams_marks_the_seams_of_abf_under_slim(ext, scene):
+    """An artist unwraps the bunny with ABF, clears the seams and switches to SLIM: with Same
+    Seams the operator marks exactly ABF's seams again (both keep the rule on them there);
+    without it, SLIM's own, fewer ones."""
+    obj = shared_mesh("bunny.off")
+    io = ext.mesh_io
+    no_seams = np.zeros(len(obj.data.edges), dtype=bool)
+
+    def marked(**props):
+        io.write_seams(obj.data, no_seams)
+        result, summary = unwrap(ext, [obj], **props)
+        assert result == {"FINISHED"} and not summary.failed
+        res = summary.results[obj.name]
+        assert np.asarray(res.face_solved).all()
+        after = read(ext, obj)
+        assert flipped_triangles(after, np.asarray(res.chart)) == 0
+        return {tuple(sorted(map(int, s))) for s in after.seams}
+
+    abf = marked(method="abf")
+    assert abf
+    assert marked(method="slim", same_seams=True) == abf
+    own = marked(method="slim", same_seams=False)
+    assert len(own) < len(abf)
