@@ -163,6 +163,47 @@ fn large_charts_start_from_the_lean_map_and_slim_keeps_it_flip_free() {
     assert!(history.energy.windows(2).all(|w| w[1] <= w[0]), "energy increased: {:?}", history.energy);
 }
 
+/// On a large chart, work given to the staged start (SLIM's analysis of its global step) runs
+/// on the calling thread, beside the mean value map or after LSCM alone, and does not change
+/// the start; SLIM's map is the same with one thread and two.
+#[test]
+fn work_beside_a_large_start_changes_nothing() {
+    let s = bumpy_disk(120, 7);
+    let chart = charts_of(&s, &[]).remove(0);
+    assert!(chart.triangles.len() >= start::SEQUENTIAL_STARTS_FROM, "{} triangles", chart.triangles.len());
+    let ops = TriangleOperators::new(&chart.positions, &chart.triangles);
+    let tris = &chart.triangles;
+    let prepare = |uv: &mut Vec<[f64; 2]>| scale_optimally(&ops, tris, uv);
+    let assess = |uv: &[[f64; 2]]| {
+        let e = symmetric_dirichlet(&ops, tris, uv);
+        if least_area(&chart, uv) > 0.0 && e.is_finite() { Ok(e) } else { Err("flips".to_string()) }
+    };
+    // With LSCM (the work after it, or beside the mean value map when LSCM is not good
+    // enough) and without (beside the mean value map).
+    for with_lscm in [true, false] {
+        let alone = start::pick_staged(&chart, &[], with_lscm, &mut Vec::new(), prepare, assess, None::<fn()>);
+        assert!(alone.1.is_none());
+        let caller = std::thread::current().id();
+        let work = || std::thread::current().id();
+        let beside = start::pick_staged(&chart, &[], with_lscm, &mut Vec::new(), prepare, assess, Some(work));
+        assert_eq!(beside.1, Some(caller), "with_lscm {with_lscm}: the work ran elsewhere or not at all");
+        let (a, b) = (alone.0.expect("a start"), beside.0.expect("a start"));
+        assert_eq!((a.1, a.2), (b.1, b.2), "with_lscm {with_lscm}");
+        assert!(max_difference(&a.0, &b.0) == 0.0, "with_lscm {with_lscm}");
+    }
+    // Factorizations sequential, as `unwrap` has them (faer's parallel kernels sum in an order
+    // that depends on the threads).
+    faer::set_global_parallelism(faer::Par::Seq);
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| slim::solve(&chart, &[], &SlimOptions { max_iterations: 3, ..Default::default() }).unwrap())
+    };
+    let (one, two) = (run(1), run(2));
+    assert!(one.fallback.is_none() && least_area(&chart, &two.uv) > 0.0);
+    let d = max_difference(&one.uv, &two.uv);
+    assert!(d == 0.0, "SLIM's map depends on the threads: {d:e}, {:?} / {:?}", one.note, two.note);
+}
+
 /// The staged start equals the choice among both candidates, except where it keeps a good
 /// enough LSCM without computing the mean value map: then it is within `LSCM_GOOD_ENOUGH` of
 /// that choice's energy (every energy is at least 1), and on these charts it is that choice.
@@ -181,7 +222,8 @@ fn staged_start_is_the_better_candidate_or_near_isometric_lscm() {
         };
         let (candidates, mut rejected) = start::candidate_starts(chart, &[], true);
         let both = start::pick(chart, candidates, &mut rejected, prepare, assess).expect("a valid start");
-        let staged = start::pick_staged(chart, &[], true, &mut Vec::new(), prepare, assess).expect("a valid start");
+        let staged = start::pick_staged(chart, &[], true, &mut Vec::new(), prepare, assess, None::<fn()>).0;
+        let staged = staged.expect("a valid start");
         assert!(both.1 >= 1.0 - 1e-9 && staged.1 >= 1.0 - 1e-9, "{name}: energies {} {}", both.1, staged.1);
         let n = chart.triangles.len();
         let side_by_side = (start::SIDE_BY_SIDE_FROM..start::SEQUENTIAL_STARTS_FROM).contains(&n);

@@ -140,7 +140,8 @@ impl Quad {
 }
 
 impl Chart {
-    /// An elimination order of the chart's vertices (AMD of the graph of its triangles),
+    /// An elimination order of the chart's vertices (AMD of the graph of its triangles, a
+    /// nested dissection from [`crate::solvers::ordering::ND_MIN_SIZE`] vertices),
     /// computed once and shared by the sparse systems solved over the chart (a start's LSCM,
     /// the method's own system, ABF++'s reduced system and its LSCM reconstruction): see
     /// [`crate::solvers::ordering::Ordering::Vertices`].

@@ -26,7 +26,7 @@ use super::fixed_boundary::{self, Weights};
 use super::{ChartFailure, ChartSolution};
 use crate::charts::Chart;
 use crate::methods::BoundaryShape;
-use crate::solvers::ordering::OrderingKind;
+use crate::solvers::ordering::{Ordering, OrderingKind};
 use crate::solvers::{FixedValueSolver, SolveError, Symmetry};
 
 /// Map one chart; the outer boundary goes to `shape`.
@@ -94,14 +94,18 @@ fn solve_refined(chart: &Chart, pins: &[(u32, [f64; 2])], tolerance: f64) -> Res
     let n = ext.positions.len();
     let bnd = fixed_boundary::boundary_positions(&ext.positions, &ext.outer, BoundaryShape::Circle);
     let system = Refinement::new(n, fixed_boundary::laplacian_triplets_with_polygons(&ext.positions, &ext.triangles, &chart.polygons, Weights::MeanValue));
-    let Some(mut uv) = system.solve(&ext.outer, &bnd, tolerance)? else {
+    // The symmetric part's graph is the chart's vertex graph when no hole was filled: the
+    // chart's elimination order, when another system of the chart (LSCM) computed it, serves.
+    let ordering =
+        if n == chart.positions.len() { chart.ordering_if_known(OrderingKind::Amd) } else { OrderingKind::Amd.into() };
+    let Some(mut uv) = system.solve(&ext.outer, &bnd, tolerance, ordering)? else {
         return Ok(None);
     };
     let mut sol = ChartSolution::direct(Vec::new());
     if !pins.is_empty() {
         // As `fixed_boundary::solve`: move the map onto the pins, then fix boundary and pins.
         let (fixed, vals) = super::fixed_boundary::onto_pins(&mut uv, &ext.outer, pins);
-        let Some(pinned) = system.solve(&fixed, &vals, tolerance)? else {
+        let Some(pinned) = system.solve(&fixed, &vals, tolerance, ordering)? else {
             return Ok(None);
         };
         uv = pinned;
@@ -181,16 +185,24 @@ impl Refinement {
     }
 
     /// Solve `A x = 0` on the unknowns not in `fixed`, with `fixed[k]` at `values[k]`; `None`
-    /// when the iteration does not converge.
+    /// when the iteration does not converge. `ordering`: that of the symmetric part's
+    /// Cholesky factorization.
     ///
     /// Start: the symmetric part's solution. Then restarted GMRES (Saad & Schultz 1986) on the
     /// free unknowns, right-preconditioned by the symmetric part's Cholesky factorization,
     /// until the true residual is below `tolerance` relative to the right-hand side (or
     /// stagnates below its square root).
-    fn solve(&self, fixed: &[u32], values: &[[f64; 2]], tolerance: f64) -> Result<Option<Vec<[f64; 2]>>, SolveError> {
+    fn solve(
+        &self,
+        fixed: &[u32],
+        values: &[[f64; 2]],
+        tolerance: f64,
+        ordering: Ordering<'_>,
+    ) -> Result<Option<Vec<[f64; 2]>>, SolveError> {
         let n = self.n;
-        // Factored once, solved on every GMRES step: AMD (see `solvers::ordering`).
-        let s = FixedValueSolver::with_ordering(n, &self.symmetric_part(), fixed, Symmetry::Symmetric, OrderingKind::Amd)?;
+        // Factored once, solved on every GMRES step: AMD (see `solvers::ordering`), or the
+        // chart's own order of its vertices.
+        let s = FixedValueSolver::with_ordering(n, &self.symmetric_part(), fixed, Symmetry::Symmetric, ordering)?;
         let cols = vec![values.iter().map(|p| p[0]).collect::<Vec<_>>(), values.iter().map(|p| p[1]).collect::<Vec<_>>()];
         let x = s.solve(&cols, &[])?;
         let mut is_fixed = vec![false; n];

@@ -73,7 +73,7 @@ use rayon::prelude::*;
 use super::nonlinear::energy::scale_optimally;
 use super::nonlinear::hessian::{project_twist, symmetric_dirichlet_derivatives};
 use super::nonlinear::iterate::{quads_left_out_note, stopped_early_note, Change, Iteration};
-use super::nonlinear::pattern::{analysed_beside, block_triplets, interleaved, BLOCK};
+use super::nonlinear::pattern::{analysed as analysed_alone, analysed_beside, block_triplets, interleaved, BLOCK};
 use super::nonlinear::pins::{anchor_vertices, anchors, translate_onto_first_pin};
 use super::nonlinear::proxy::reweight;
 use super::nonlinear::start;
@@ -225,7 +225,14 @@ type Start = (Vec<[f64; 2]>, f64, &'static str);
 
 /// The start ([`start::pick`]): LSCM (with [`SlimStart::Auto`]) and the mean value map, both
 /// honouring spanning pins; without such pins each is scaled optimally and moved onto the pin.
-fn pick_start(chart: &Chart, pins: &[(u32, [f64; 2])], ops: &TriangleOperators, options: &SlimOptions) -> (Option<Start>, Vec<String>) {
+/// `beside` runs as in [`start::pick_staged`] (after the start when that does not run it).
+fn pick_start<X: Send>(
+    chart: &Chart,
+    pins: &[(u32, [f64; 2])],
+    ops: &TriangleOperators,
+    options: &SlimOptions,
+    beside: Option<impl FnOnce() -> X + Send>,
+) -> (Option<Start>, Vec<String>, Option<X>) {
     let tris = &chart.triangles;
     let spanning = lscm::pins_span(pins);
     let start_pins: &[(u32, [f64; 2])] = if spanning { pins } else { &[] };
@@ -254,12 +261,13 @@ fn pick_start(chart: &Chart, pins: &[(u32, [f64; 2])], ops: &TriangleOperators, 
     if let Some(uv) = if spanning || options.start != SlimStart::Auto { None } else { unfold(chart) } {
         if let Some(best) = start::pick(chart, vec![(uv, "unfold")], &mut rejected, &mut prepare, &mut assess) {
             if super::nonconvex_quads(chart, &best.0) == 0 {
-                return (Some(best), rejected);
+                return (Some(best), rejected, beside.map(|b| b()));
             }
         }
     }
-    let best = start::pick_staged(chart, start_pins, options.start == SlimStart::Auto, &mut rejected, &mut prepare, &mut assess);
-    (best, rejected)
+    let auto = options.start == SlimStart::Auto;
+    let (best, x) = start::pick_staged(chart, start_pins, auto, &mut rejected, &mut prepare, &mut assess, beside);
+    (best, rejected, x)
 }
 
 /// SLIM of one chart (see the module docs).
@@ -307,6 +315,19 @@ fn seconds(a: Option<Instant>, b: Option<Instant>) -> f64 {
 /// iteration's energy is the same to six digits. SLIM's proxy steps are solved accurately.
 pub(crate) const INEXACT: f64 = 1e-3;
 
+/// Accuracy of SLIM's proxy steps' solves, as [`INEXACT`] (the residual relative to its value
+/// at the current map), but tight: solved like the Newton steps (to [`INEXACT`]), the first
+/// step's flip-free bound was three times shorter on camelhead split once, and the iteration
+/// took one step more. A single-precision factor reaches it by conjugate gradients, where
+/// iterative refinement, which [`FixedValueSolver::solve`] uses, can stop converging on the
+/// first step's weights (huge where the start squeezes a triangle) and then refactor in double
+/// precision for the rest of the iteration: on fertility subdivided three times and cut by
+/// automatic seams (576,000 triangles, LSCM start), refinement gave up on the first step and
+/// every Newton step then factored in double precision (1.15–1.37 s each); conjugate
+/// gradients took 6 steps (0.9 s against 1.75–2.2 s) and the Newton factorizations stayed
+/// single (0.72–0.94 s), to the same energies (1.069259 against 1.069255).
+const PROXY_ACCURACY: f64 = 1e-10;
+
 /// [`solve_with_history`]; `timed` says whether the history's seconds are measured (they are
 /// 0 otherwise; the energies and steps are the same).
 fn solve_timed(chart: &Chart, pins: &[(u32, [f64; 2])], options: &SlimOptions, timed: bool) -> Result<(ChartSolution, SlimHistory), ChartFailure> {
@@ -317,8 +338,9 @@ fn solve_timed(chart: &Chart, pins: &[(u32, [f64; 2])], options: &SlimOptions, t
     let (rest, scale) = super::nonlinear::pins::rest_positions(chart, pins);
     let ops = TriangleOperators::new(&rest, &chart.triangles);
     let t_start = clock.now();
-    // The global step's system is analysed beside the start for mid-sized charts, over the
-    // barrier of a start that leaves no quad out (the usual case; see below).
+    // The global step's system is analysed beside the start (beside its mean value map on
+    // large charts), over the barrier of a start that leaves no quad out (the usual case; see
+    // below).
     let fixed_ids: Vec<u32> = anchor_vertices(pins).iter().flat_map(|&v| [2 * v, 2 * v + 1]).collect();
     let all_splits = if chart.quads.is_empty() { None } else { Some(chart.triangles_both_splits().0) };
     // One elimination order of the chart's vertices serves the LSCM start and the global step
@@ -326,8 +348,18 @@ fn solve_timed(chart: &Chart, pins: &[(u32, [f64; 2])], options: &SlimOptions, t
     // for nested dissection).
     let shared = options.start == SlimStart::Auto || OrderingKind::Auto.resolve(2 * n) == OrderingKind::Amd;
     let ordering = if shared { chart.ordering(OrderingKind::Auto) } else { OrderingKind::Auto.into() };
-    let ((start, rejected), mut analysed) =
-        analysed_beside(2 * n, all_splits.as_deref().unwrap_or(&chart.triangles), interleaved, &fixed_ids, ordering, || pick_start(chart, pins, &ops, options));
+    let barrier_all = all_splits.as_deref().unwrap_or(&chart.triangles);
+    let (start, rejected, mut analysed) = if chart.triangles.len() >= start::SEQUENTIAL_STARTS_FROM {
+        // Beside the mean value start only (`pattern::ANALYSE_BESIDE_FROM`).
+        let analyse = || analysed_alone(2 * n, barrier_all, interleaved, &fixed_ids, ordering);
+        let (start, rejected, analysis) = pick_start(chart, pins, &ops, options, Some(analyse));
+        (start, rejected, analysis.flatten())
+    } else {
+        let start = || pick_start(chart, pins, &ops, options, None::<fn()>);
+        let ((start, rejected, _), analysis) =
+            analysed_beside(2 * n, barrier_all, interleaved, &fixed_ids, ordering, start);
+        (start, rejected, analysis)
+    };
     drop(all_splits);
     let start_seconds = seconds(t_start, clock.now());
     let Some((mut uv, mut energy, start_name)) = start else {
@@ -469,11 +501,12 @@ fn solve_timed(chart: &Chart, pins: &[(u32, [f64; 2])], options: &SlimOptions, t
         };
         let t2 = clock.now();
         // A failed global step (extreme weights) ends the iteration; the current map is valid.
-        // The proxy step is solved accurately: solved like the Newton steps (to `INEXACT`), the
-        // first step's flip-free bound was three times shorter on camelhead split once, and
-        // the iteration took one step more.
-        let x = match factored.and_then(|()| solver.as_ref().expect("factored above").solve(&[fixed_vals.clone()], &[b])) {
-            Ok(mut x) => x.pop().unwrap_or_default(),
+        // The proxy step is solved accurately (to `PROXY_ACCURACY`, see there), from the
+        // current map.
+        let guess: Vec<f64> = uv.iter().flat_map(|p| [p[0], p[1]]).collect();
+        let solved = |s: &FixedValueSolver| s.solve_inexact(&fixed_vals, &b, &guess, PROXY_ACCURACY);
+        let x = match factored.and_then(|()| solved(solver.as_ref().expect("factored above"))) {
+            Ok(x) => x,
             Err(e) => {
                 stopped = Some(e.to_string());
                 break;

@@ -523,6 +523,44 @@ mod tests {
         }
     }
 
+    /// Between the two: a system too ill-conditioned for iterative refinement from a
+    /// single-precision factor (it stops converging and refactors in double precision) is
+    /// still solved to a tight accuracy by conjugate gradients preconditioned by that factor
+    /// ([`RefinedLlt::solve_inexact`], SLIM's proxy steps), in single precision and to the
+    /// double-precision answer.
+    #[test]
+    fn conjugate_gradients_reach_what_refinement_gives_up_on() {
+        let real = |x: f64, _k: usize| x;
+        let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        for shift in [1e-7, 1e-8] {
+            let (a, val) = grid(60, 60, shift, 1.0, real);
+            let b = rhs(a.nrows(), real);
+            let (precision, _, _) = compare(&a, &val, &b);
+            assert_eq!(precision, Some(Precision::Double), "shift {shift:e}: refinement kept single precision");
+            let sym = factorize_symbolic_cholesky(a.as_ref(), Side::Lower, SymmetricOrdering::Amd, Default::default());
+            let sym = sym.unwrap();
+            let mut mem = MemBuffer::new(RefinedLlt::<f64>::scratch(&sym, Par::Seq, 1));
+            let mat = SparseColMatRef::new(a.as_ref(), &val);
+            let mut f = RefinedLlt::<f64>::new(true);
+            f.factor(&sym, mat, Side::Lower, Par::Seq, MemStack::new(&mut mem)).unwrap();
+            let mut x = vec![0.0; a.nrows()];
+            let solved = f.solve_inexact(&sym, mat, &b, &mut x, 1e-10, Par::Seq, MemStack::new(&mut mem)).unwrap();
+            assert!(solved, "shift {shift:e}: conjugate gradients did not converge");
+            assert_eq!(f.precision(), Some(Precision::Single), "shift {shift:e}");
+            let mut r = b.clone();
+            sub_hermitian_product(mat, &x, &mut r);
+            assert!(norm(&r) <= 1.01e-10 * norm(&b), "shift {shift:e}: residual {:.3e} of {:.3e}", norm(&r), norm(&b));
+            // The double-precision answer, by a double factorization.
+            let mut d = RefinedLlt::<f64>::new(false);
+            d.factor(&sym, mat, Side::Lower, Par::Seq, MemStack::new(&mut mem)).unwrap();
+            let mut y = b.clone();
+            let y_mat = MatMut::from_column_major_slice_mut(&mut y, a.nrows(), 1);
+            d.solve_in_place(&sym, mat, Side::Lower, y_mat, Par::Seq, MemStack::new(&mut mem)).unwrap();
+            let diff = x.iter().zip(&y).map(|(p, q)| (p - q) * (p - q)).sum::<f64>().sqrt();
+            assert!(diff <= 1e-7 * norm(&y), "shift {shift:e}: {:.3e} from the double solution", diff / norm(&y));
+        }
+    }
+
     /// A matrix that is not positive definite fails in both precisions.
     #[test]
     fn indefinite_matrices_are_refused() {

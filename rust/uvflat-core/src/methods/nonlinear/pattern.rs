@@ -65,21 +65,41 @@ pub fn block_triplets(tris: &[[u32; 3]], unknown: fn(&[u32; 3], usize) -> u32) -
     out
 }
 
-/// Charts with a number of triangles in this range analyse their global step's system
+/// Charts with at least this many triangles analyse their global step's system
 /// ([`analysed_beside`]) while their starting map is computed: on camelhead (22,704
 /// triangles) the pattern, ordering and symbolic factorization of SLIM's system take
 /// 0.02–0.03 s, a tenth of the whole solve, and the starts leave a thread free for part of
-/// their time. Smaller charts gain nothing worth a task; larger ones compute their starts one
-/// after the other to bound the peak memory ([`super::start::SEQUENTIAL_STARTS_FROM`]), which
-/// an analysis alive through the start would raise.
-pub const ANALYSE_BESIDE_START: std::ops::Range<usize> = 2_000..super::start::SEQUENTIAL_STARTS_FROM;
+/// their time. Smaller charts gain nothing worth a task.
+///
+/// Charts of [`super::start::SEQUENTIAL_STARTS_FROM`] triangles or more compute their starts
+/// one after the other on one thread, and their analysis (a nested dissection) is long: 2.2–2.4
+/// s of the first iteration on fertility subdivided three times and cut by automatic seams
+/// (576,000 triangles). It runs beside the mean value start, after the LSCM start
+/// ([`super::start::pick_staged`]), or after both when that map is not needed: beside the
+/// whole start, the LSCM factorization and the analysis's triplets were alive at once, and the
+/// peak rose from 1.02 to 1.33 GB on 3holes subdivided three times (460,800 triangles).
+pub const ANALYSE_BESIDE_FROM: usize = 2_000;
 
-/// `start()` and, for a chart whose triangle count is in [`ANALYSE_BESIDE_START`], beside it
-/// the analysis ([`FixedValueSolver::analyse_with`], with `ordering`) of the symmetric
-/// 2n-unknown block system over `tris` with the unknowns `fixed` held, numbered by `unknown`. The analysis runs on the
-/// calling thread, also outside rayon's pool (so that it sees this thread's settings), and
-/// `start` on whichever thread of the pool is free. `None` for other charts, and when the
-/// analysis fails (the method then analyses as usual and meets the failure itself).
+/// The analysis ([`FixedValueSolver::analyse_with`], with `ordering`) of the symmetric
+/// 2n-unknown block system over `tris` with the unknowns `fixed` held, numbered by `unknown`;
+/// `None` when it fails (the method then analyses as usual and meets the failure itself).
+pub fn analysed(
+    n_unknowns: usize,
+    tris: &[[u32; 3]],
+    unknown: fn(&[u32; 3], usize) -> u32,
+    fixed: &[u32],
+    ordering: Ordering<'_>,
+) -> Option<FixedValueSolver> {
+    let triplets = block_triplets(tris, unknown);
+    FixedValueSolver::analyse_with(n_unknowns, &triplets, fixed, Symmetry::Symmetric, ordering).ok()
+}
+
+/// `start()` and, for a chart of [`ANALYSE_BESIDE_FROM`] triangles up to
+/// [`super::start::SEQUENTIAL_STARTS_FROM`], beside it the system's [`analysed`]. The analysis
+/// runs on the calling thread, also outside rayon's pool (so that it sees this thread's
+/// settings), and `start` on whichever thread of the pool is free. `None` for other charts
+/// (larger ones analyse beside their mean value start, see [`ANALYSE_BESIDE_FROM`]), and when
+/// the analysis fails.
 pub fn analysed_beside<S: Send>(
     n_unknowns: usize,
     tris: &[[u32; 3]],
@@ -88,15 +108,12 @@ pub fn analysed_beside<S: Send>(
     ordering: Ordering<'_>,
     start: impl FnOnce() -> S + Send,
 ) -> (S, Option<FixedValueSolver>) {
-    if !ANALYSE_BESIDE_START.contains(&tris.len()) {
+    if !(ANALYSE_BESIDE_FROM..super::start::SEQUENTIAL_STARTS_FROM).contains(&tris.len()) {
         return (start(), None);
     }
-    let mut started = None;
-    let analysed = rayon::in_place_scope(|scope| {
-        scope.spawn(|_| started = Some(start()));
-        FixedValueSolver::analyse_with(n_unknowns, &block_triplets(tris, unknown), fixed, Symmetry::Symmetric, ordering).ok()
-    });
-    (started.expect("the scope ran the start"), analysed)
+    let analyse = || analysed(n_unknowns, tris, unknown, fixed, ordering);
+    let (started, analysis) = super::start::next_to(start, Some(analyse));
+    (started, analysis.flatten())
 }
 
 /// Vertex pairs `(a, b)`, `a > b`, of all triangle edges, sorted and unique.

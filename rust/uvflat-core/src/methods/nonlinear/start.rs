@@ -123,37 +123,64 @@ pub const SIDE_BY_SIDE_FROM: usize = 20_000;
 /// otherwise, and the better of the two wins as in [`pick`]. Charts from
 /// [`SIDE_BY_SIDE_FROM`] to [`SEQUENTIAL_STARTS_FROM`] triangles compute both side by side
 /// instead.
-pub fn pick_staged(
+///
+/// `beside`, when given, runs on the calling thread beside the mean value map (after LSCM: a
+/// large chart's LSCM factorization is the start's largest allocation, see
+/// [`super::pattern::ANALYSE_BESIDE_FROM`]), or after the start when that map is not computed;
+/// its result is returned with the start.
+#[allow(clippy::too_many_arguments)]
+pub fn pick_staged<X: Send>(
     chart: &Chart,
     start_pins: &[(u32, [f64; 2])],
     with_lscm: bool,
     rejected: &mut Vec<String>,
     mut prepare: impl FnMut(&mut Vec<[f64; 2]>),
     mut assess: impl FnMut(&[[f64; 2]]) -> Result<f64, String>,
-) -> Option<(Vec<[f64; 2]>, f64, &'static str)> {
+    beside: Option<impl FnOnce() -> X + Send>,
+) -> (Option<(Vec<[f64; 2]>, f64, &'static str)>, Option<X>) {
     let n = chart.triangles.len();
     if !with_lscm || (SIDE_BY_SIDE_FROM..SEQUENTIAL_STARTS_FROM).contains(&n) {
-        let (candidates, more) = candidate_starts(chart, start_pins, with_lscm);
+        let ((candidates, more), x) = next_to(|| candidate_starts(chart, start_pins, with_lscm), beside);
         rejected.extend(more);
-        return pick(chart, candidates, rejected, prepare, assess);
+        return (pick(chart, candidates, rejected, prepare, assess), x);
     }
     let lscm_start = sorted_out([lscm_candidate(chart, start_pins)], rejected);
     let first = pick(chart, lscm_start, rejected, &mut prepare, &mut assess);
     if let Some((uv, e, _)) = &first {
         if *e <= LSCM_GOOD_ENOUGH && nonconvex_quads(chart, uv) == 0 {
-            return first;
+            return (first, beside.map(|b| b()));
         }
     }
-    let mean_value = sorted_out([mean_value_candidate(chart, start_pins)], rejected);
+    let (mean_value, x) = next_to(|| mean_value_candidate(chart, start_pins), beside);
+    let mean_value = sorted_out([mean_value], rejected);
     let second = pick(chart, mean_value, rejected, &mut prepare, &mut assess);
-    match (first, second) {
+    let best = match (first, second) {
         (Some(a), Some(b)) => {
             let rank = |s: &(Vec<[f64; 2]>, f64, &'static str)| (nonconvex_quads(chart, &s.0), s.1);
             // as `pick`: the first (LSCM) wins a tie
             Some(if rank(&b) < rank(&a) { b } else { a })
         }
         (a, b) => a.or(b),
-    }
+    };
+    (best, x)
+}
+
+/// `work()` and, when given, `beside()` at the same time: `beside` on the calling thread, also
+/// outside rayon's pool (so that it sees this thread's settings), `work` on whichever thread
+/// of the pool is free. Without `beside`, `work()` alone on this thread.
+pub fn next_to<W: Send, X: Send>(
+    work: impl FnOnce() -> W + Send,
+    beside: Option<impl FnOnce() -> X + Send>,
+) -> (W, Option<X>) {
+    let Some(beside) = beside else {
+        return (work(), None);
+    };
+    let mut done = None;
+    let x = rayon::in_place_scope(|scope| {
+        scope.spawn(|_| done = Some(work()));
+        beside()
+    });
+    (done.expect("the scope ran the work"), Some(x))
 }
 
 /// The best of `candidates`: each is first changed by `prepare` (e.g. scaled optimally), then

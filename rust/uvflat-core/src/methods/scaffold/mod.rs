@@ -201,8 +201,9 @@ fn pick_start(chart: &Chart, ops: &TriangleOperators, pins: &[(u32, [f64; 2])]) 
                 build_scaffold(chart, uv).map(|_| e)
             }
         },
+        None::<fn()>,
     );
-    (best, rejected)
+    (best.0, rejected)
 }
 
 /// [`solve`], also returning the chart's normalised symmetric Dirichlet energy before the first
