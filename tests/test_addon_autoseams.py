@@ -295,17 +295,12 @@ def test_benchmark_starts_every_run_from_the_mesh_s_own_seams(ext, scene, monkey
 
     obj = _sphere("BenchSphere")
     mesh_io = ext.mesh_io
-    seen = []
+    seen, marked = [], []
     run_once = benchmark.run_once
 
-    def recording(o, kind, method):
-        seen.append(len(mesh_io.read_seams(o.data)))
-        return run_once(o, kind, method)
-
-    marked = []
-
     def marking(o, kind, method):
-        out = recording(o, kind, method)
+        seen.append(len(mesh_io.read_seams(o.data)))
+        out = run_once(o, kind, method)
         marked.append(len(mesh_io.read_seams(o.data)))
         return out
 

@@ -73,7 +73,7 @@ use rayon::prelude::*;
 use super::nonlinear::energy::scale_optimally;
 use super::nonlinear::hessian::{project_twist, symmetric_dirichlet_derivatives};
 use super::nonlinear::iterate::{quads_left_out_note, stopped_early_note, Change, Iteration};
-use super::nonlinear::pattern::{analysed as analysed_alone, analysed_beside, block_triplets, interleaved, BLOCK};
+use super::nonlinear::pattern::{analyse_blocks, analysed_beside, block_triplets, interleaved, BLOCK};
 use super::nonlinear::pins::{anchor_vertices, anchors, translate_onto_first_pin};
 use super::nonlinear::proxy::reweight;
 use super::nonlinear::start;
@@ -225,7 +225,8 @@ type Start = (Vec<[f64; 2]>, f64, &'static str);
 
 /// The start ([`start::pick`]): LSCM (with [`SlimStart::Auto`]) and the mean value map, both
 /// honouring spanning pins; without such pins each is scaled optimally and moved onto the pin.
-/// `beside` runs as in [`start::pick_staged`] (after the start when that does not run it).
+/// `beside` runs as in [`start::pick_staged`], and not at all when the chart unfolds
+/// isometrically (its map is the answer; nothing is iterated, so nothing is factored).
 fn pick_start<X: Send>(
     chart: &Chart,
     pins: &[(u32, [f64; 2])],
@@ -261,7 +262,7 @@ fn pick_start<X: Send>(
     if let Some(uv) = if spanning || options.start != SlimStart::Auto { None } else { unfold(chart) } {
         if let Some(best) = start::pick(chart, vec![(uv, "unfold")], &mut rejected, &mut prepare, &mut assess) {
             if super::nonconvex_quads(chart, &best.0) == 0 {
-                return (Some(best), rejected, beside.map(|b| b()));
+                return (Some(best), rejected, None);
             }
         }
     }
@@ -351,7 +352,7 @@ fn solve_timed(chart: &Chart, pins: &[(u32, [f64; 2])], options: &SlimOptions, t
     let barrier_all = all_splits.as_deref().unwrap_or(&chart.triangles);
     let (start, rejected, mut analysed) = if chart.triangles.len() >= start::SEQUENTIAL_STARTS_FROM {
         // Beside the mean value start only (`pattern::ANALYSE_BESIDE_FROM`).
-        let analyse = || analysed_alone(2 * n, barrier_all, interleaved, &fixed_ids, ordering);
+        let analyse = || analyse_blocks(2 * n, barrier_all, interleaved, &fixed_ids, ordering);
         let (start, rejected, analysis) = pick_start(chart, pins, &ops, options, Some(analyse));
         (start, rejected, analysis.flatten())
     } else {

@@ -83,7 +83,7 @@ pub const ANALYSE_BESIDE_FROM: usize = 2_000;
 /// The analysis ([`FixedValueSolver::analyse_with`], with `ordering`) of the symmetric
 /// 2n-unknown block system over `tris` with the unknowns `fixed` held, numbered by `unknown`;
 /// `None` when it fails (the method then analyses as usual and meets the failure itself).
-pub fn analysed(
+pub fn analyse_blocks(
     n_unknowns: usize,
     tris: &[[u32; 3]],
     unknown: fn(&[u32; 3], usize) -> u32,
@@ -95,7 +95,7 @@ pub fn analysed(
 }
 
 /// `start()` and, for a chart of [`ANALYSE_BESIDE_FROM`] triangles up to
-/// [`super::start::SEQUENTIAL_STARTS_FROM`], beside it the system's [`analysed`]. The analysis
+/// [`super::start::SEQUENTIAL_STARTS_FROM`], beside it the system's [`analyse_blocks`]. The analysis
 /// runs on the calling thread, also outside rayon's pool (so that it sees this thread's
 /// settings), and `start` on whichever thread of the pool is free. `None` for other charts
 /// (larger ones analyse beside their mean value start, see [`ANALYSE_BESIDE_FROM`]), and when
@@ -111,7 +111,7 @@ pub fn analysed_beside<S: Send>(
     if !(ANALYSE_BESIDE_FROM..super::start::SEQUENTIAL_STARTS_FROM).contains(&tris.len()) {
         return (start(), None);
     }
-    let analyse = || analysed(n_unknowns, tris, unknown, fixed, ordering);
+    let analyse = || analyse_blocks(n_unknowns, tris, unknown, fixed, ordering);
     let (started, analysis) = super::start::next_to(start, Some(analyse));
     (started, analysis.flatten())
 }
