@@ -517,7 +517,9 @@ def phase_line(uvflat, name, method, positions, corner_verts, face_sizes, xatlas
     p = r.phases
     ratio = f", {seconds / xatlas_row['seconds']:.2f}× xatlas" if xatlas_row else ""
     return (f"- {name} · uvflat {method} phases: build charts {p['build_charts']:.3f} s, "
-            f"plan cuts {p['plan_cuts']:.3f} s ({p.get('predicted_rounds', 0)} predicted rounds), "
+            f"plan cuts {p['plan_cuts']:.3f} s ({p.get('predicted_rounds', 0)} predicted rounds; "
+            f"cutting state {p.get('cut_state', 0):.3f}, cone placement {p.get('cone_placement', 0):.3f}, "
+            f"split plans {p.get('split_plans', 0):.3f}, cut graphs {p.get('cut_graphs', 0):.3f}), "
             f"first solves {p['solve']:.3f} s, repair solves "
             f"{p['repair_solve']:.3f} s ({p['repair_rounds']} rounds, {p['repair_pieces']} pieces, "
             f"{p['splits']} splits ({p.get('predicted_splits', 0)} before any solve), {p.get('peels', 0)} peels, "

@@ -135,7 +135,10 @@ def main(argv=None):
             if "phases" in r:
                 p = r["phases"]
                 phases.append(f"{name}×{levels} {job}: plan cuts {p['plan_cuts']:.2f} s "
-                              f"({p.get('predicted_rounds', 0)} predicted rounds), first solves "
+                              f"({p.get('predicted_rounds', 0)} predicted rounds; cutting state "
+                              f"{p.get('cut_state', 0):.2f}, cone placement {p.get('cone_placement', 0):.2f}, "
+                              f"split plans {p.get('split_plans', 0):.2f}, cut graphs "
+                              f"{p.get('cut_graphs', 0):.2f}), first solves "
                               f"{p['solve']:.2f} s, repair solves {p['repair_solve']:.2f} s "
                               f"({p['repair_rounds']} rounds, {p['repair_pieces']} pieces, "
                               f"{p['splits']} splits ({p.get('predicted_splits', 0)} before any solve), "

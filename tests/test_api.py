@@ -1460,10 +1460,15 @@ def test_phases_account_for_the_pipeline():
     pos, cv, fs = cube()
     r = uvflat.unwrap(pos, cv, fs, method="abf")
     p = r.phases
+    parts = {"cut_state", "cone_placement", "split_plans", "cut_graphs"}
     assert set(p) == {"build_charts", "plan_cuts", "solve", "repair_solve", "measure",
                       "predicted_rounds", "repair_rounds", "repair_pieces", "splits", "predicted_splits",
-                      "peels", "last_resort"}
+                      "peels", "last_resort"} | parts
     assert all(v >= 0 for v in p.values())
+    # The parts of plan_cuts add up to it; a cube planned on the prediction has cutting state,
+    # placed cones and cut graphs.
+    assert sum(p[k] for k in parts) == pytest.approx(p["plan_cuts"], rel=1e-9, abs=1e-12)
+    assert p["cut_state"] > 0 and p["cone_placement"] > 0 and p["cut_graphs"] > 0
     # Every piece of the cube keeps the rule with ABF: nothing handed to scaffold.
     assert p["last_resort"] == 0 and all(c.method == "abf" for c in r.charts)
     # A closed cube is cut: planned and solved in at least one repair round.

@@ -104,6 +104,11 @@ fn a_plan_predicted_above_the_mean_limit_is_split_before_any_solve() {
     let r = unwrap(&s.input(), &UnwrapOptions { method: Method::Abf(abf::AbfOptions::default()), ..Default::default() }).unwrap();
     assert!(r.phases.predicted_splits >= 1, "{:?}", r.phases);
     assert!(r.phases.splits >= r.phases.predicted_splits);
+    // The split's planning is counted in its own part of `plan_cuts`, and the parts add up.
+    let p = &r.phases;
+    assert!(p.split_plans > 0.0 && p.cone_placement > 0.0 && p.cut_state > 0.0, "{p:?}");
+    let parts = p.cut_state + p.cone_placement + p.split_plans + p.cut_graphs;
+    assert!((parts - p.plan_cuts).abs() <= 1e-9 * p.plan_cuts, "{p:?}");
     assert!(r.charts.len() >= 2);
     let options = UnwrapOptions::default();
     let rule = uvflat_core::pipeline::rule::AtlasRule { max_stretch: options.auto_seams.max_stretch, full: true };

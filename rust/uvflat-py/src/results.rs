@@ -187,7 +187,11 @@ impl PyUnwrapResult {
 impl PyUnwrapResult {
     /// Where the time went, as a dict: ``build_charts``, ``plan_cuts``, ``solve``,
     /// ``repair_solve``, ``measure`` (seconds; the steps of different charts run in parallel,
-    /// so ``plan_cuts``, ``solve`` and ``repair_solve`` are summed over threads), and the
+    /// so ``plan_cuts``, ``solve`` and ``repair_solve`` are summed over threads), the parts of
+    /// ``plan_cuts``: ``cut_state`` (each chart's edge graph, costs, occlusion rays and scale
+    /// system, and the predicted flattening of disks), ``cone_placement`` (the rounds that
+    /// place cones on a predicted flattening), ``split_plans`` (the split's candidate loops)
+    /// and ``cut_graphs`` (every round's cones and cut graph, with the pieces rebuilt), and the
     /// counts ``predicted_rounds`` (cones planned on a predicted flattening, nothing solved),
     /// ``repair_rounds``, ``repair_pieces``, ``splits``, ``predicted_splits`` (splits made
     /// before any solve, the chart's predicted mean area distortion being too high),
@@ -201,6 +205,10 @@ impl PyUnwrapResult {
         let d = PyDict::new(py);
         d.set_item("build_charts", p.build_charts)?;
         d.set_item("plan_cuts", p.plan_cuts)?;
+        d.set_item("cut_state", p.cut_state)?;
+        d.set_item("cone_placement", p.cone_placement)?;
+        d.set_item("split_plans", p.split_plans)?;
+        d.set_item("cut_graphs", p.cut_graphs)?;
         d.set_item("solve", p.solve)?;
         d.set_item("repair_solve", p.repair_solve)?;
         d.set_item("measure", p.measure)?;

@@ -333,12 +333,18 @@ impl ScaleSolver {
 
 /// The cotangent Laplacian of `chart` (weights ½(cot α + cot β) from clamped angles, positive
 /// semi-definite): its lower triangle `(row, col, value)`, row ≥ col, sorted by column then
-/// row, with every diagonal present; and each vertex's angle sum. Merged by sorting (no
-/// hashing on large charts). Shared by [`ScaleSolver`] and [`super::fiedler`].
+/// row, with every diagonal present; and each vertex's angle sum. Shared by [`ScaleSolver`]
+/// and [`super::fiedler`].
+///
+/// The diagonal is summed per vertex in triangle order; the off-diagonal terms (three per
+/// triangle, two per interior edge, whose sum does not depend on their order) are merged by
+/// sorting packed `(col, row)` keys, then each column's diagonal is put before its rows. A
+/// stable sort of all nine terms per triangle cost 0.25–0.3 s at 460k triangles.
 pub(crate) fn cotan_laplacian(chart: &Chart) -> (Vec<(u32, u32, f64)>, Vec<f64>) {
     let n = chart.positions.len();
     let mut sums = vec![0.0f64; n];
-    let mut triplets: Vec<(u32, u32, f64)> = Vec::with_capacity(9 * chart.triangles.len() + n);
+    let mut diag = vec![0.0f64; n];
+    let mut off: Vec<(u64, f64)> = Vec::with_capacity(3 * chart.triangles.len());
     for t in &chart.triangles {
         let p = [chart.positions[t[0] as usize], chart.positions[t[1] as usize], chart.positions[t[2] as usize]];
         let a = clamped_angles(p);
@@ -346,20 +352,24 @@ pub(crate) fn cotan_laplacian(chart: &Chart) -> (Vec<(u32, u32, f64)>, Vec<f64>)
             sums[t[k] as usize] += a[k];
             let (i, j) = (t[(k + 1) % 3], t[(k + 2) % 3]);
             let w = 0.5 / a[k].tan();
-            triplets.push((i.max(j), i.min(j), -w));
-            triplets.push((i, i, w));
-            triplets.push((j, j, w));
+            off.push((((i.min(j) as u64) << 32) | i.max(j) as u64, -w));
+            diag[i as usize] += w;
+            diag[j as usize] += w;
         }
     }
-    for v in 0..n as u32 {
-        triplets.push((v, v, 0.0));
-    }
-    triplets.sort_by_key(|e| (e.1, e.0));
-    let mut entries: Vec<(u32, u32, f64)> = Vec::with_capacity(triplets.len() / 3);
-    for (r, c, w) in triplets {
-        match entries.last_mut() {
-            Some(last) if last.0 == r && last.1 == c => last.2 += w,
-            _ => entries.push((r, c, w)),
+    off.sort_unstable_by_key(|e| e.0);
+    let mut entries: Vec<(u32, u32, f64)> = Vec::with_capacity(off.len() / 2 + n);
+    let mut next = 0usize;
+    for (c, &d) in diag.iter().enumerate() {
+        entries.push((c as u32, c as u32, d));
+        while next < off.len() && (off[next].0 >> 32) as usize == c {
+            let (key, w) = off[next];
+            let r = key as u32;
+            match entries.last_mut() {
+                Some(last) if last.0 == r && last.1 == c as u32 => last.2 += w,
+                _ => entries.push((r, c as u32, w)),
+            }
+            next += 1;
         }
     }
     (entries, sums)
@@ -561,4 +571,59 @@ fn dense_cholesky_solve(a: &mut [f64], b: &mut [f64], k: usize) -> bool {
         b[i] = x / a[i * k + i];
     }
     true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The Laplacian assembled edge by edge in a map keyed `(col, row)`, each corner's
+    /// cotangent from the dot and cross products of its sides: the reference
+    /// [`cotan_laplacian`] is checked against.
+    fn by_map(chart: &Chart) -> (Vec<(u32, u32, f64)>, Vec<f64>) {
+        use crate::geometry::{cross, dot, norm, sub};
+        let mut sums = vec![0.0f64; chart.positions.len()];
+        let mut m: std::collections::BTreeMap<(u32, u32), f64> =
+            (0..chart.positions.len() as u32).map(|v| ((v, v), 0.0)).collect();
+        for t in &chart.triangles {
+            for k in 0..3 {
+                let (o, i, j) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
+                let at = |v: u32| chart.positions[v as usize];
+                let (a, b) = (sub(at(i), at(o)), sub(at(j), at(o)));
+                let (c, d) = (norm(cross(a, b)), dot(a, b));
+                sums[o as usize] += c.atan2(d);
+                let half_cot = 0.5 * d / c;
+                *m.entry((i.min(j), i.max(j))).or_insert(0.0) -= half_cot;
+                for v in [i, j] {
+                    *m.get_mut(&(v, v)).unwrap() += half_cot;
+                }
+            }
+        }
+        (m.into_iter().map(|((c, r), w)| (r, c, w)).collect(), sums)
+    }
+
+    #[test]
+    fn the_laplacian_merged_by_sorting_is_the_one_summed_term_by_term() {
+        for k in [2u32, 3, 7, 20] {
+            let chart = crate::charts::bumpy_grid_chart(k);
+            let (entries, sums) = cotan_laplacian(&chart);
+            let (want, want_sums) = by_map(&chart);
+            assert!(sums.iter().zip(&want_sums).all(|(a, b)| (a - b).abs() < 1e-12));
+            assert_eq!(entries.len(), want.len(), "k = {k}");
+            for (e, w) in entries.iter().zip(&want) {
+                assert_eq!((e.0, e.1), (w.0, w.1), "k = {k}");
+                assert!(e.0 >= e.1);
+                assert!((e.2 - w.2).abs() <= 1e-12 * w.2.abs().max(1.0), "k = {k}: {e:?} against {w:?}");
+            }
+            // Rows sum to zero (a Laplacian), with each off-diagonal counted in both its rows.
+            let mut row = vec![0.0f64; chart.positions.len()];
+            for &(r, c, w) in &entries {
+                row[r as usize] += w;
+                if r != c {
+                    row[c as usize] += w;
+                }
+            }
+            assert!(row.iter().all(|x| x.abs() < 1e-9), "k = {k}");
+        }
+    }
 }

@@ -4,8 +4,6 @@
 //! this graph is built from the chart's polygons, not from its triangles: vertices are chart
 //! vertices, edges are polygon edges, and the dual graph's nodes are the polygons.
 
-use std::collections::HashMap;
-
 use crate::charts::Chart;
 use crate::geometry::{cross, dot, norm, sub};
 use crate::mesh::PolyMesh;
@@ -64,31 +62,28 @@ impl ChartGraph {
                 }
             })
             .collect();
-        let mut index: HashMap<(u32, u32), u32> = HashMap::new();
-        let mut edges: Vec<[u32; 2]> = Vec::new();
-        let mut edge_polygons: Vec<[u32; 2]> = Vec::new();
+        // Every polygon side keyed by its vertex pair, sorted (then by polygon, so the first
+        // polygon of an edge is the one met first): edge ids in vertex-pair order.
+        let mut sides: Vec<(u64, u32)> = Vec::with_capacity(polygons.iter().map(Vec::len).sum());
         for (p, poly) in polygons.iter().enumerate() {
             for i in 0..poly.len() {
                 let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
-                let key = (a.min(b), a.max(b));
-                let e = *index.entry(key).or_insert_with(|| {
-                    edges.push([key.0, key.1]);
-                    edge_polygons.push([u32::MAX; 2]);
-                    (edges.len() - 1) as u32
-                });
-                let slot = &mut edge_polygons[e as usize];
-                if slot[0] == u32::MAX {
-                    slot[0] = p as u32;
-                } else {
-                    slot[1] = p as u32;
-                }
+                sides.push((((a.min(b) as u64) << 32) | a.max(b) as u64, p as u32));
             }
         }
-        // Sort edges so that ids do not depend on hash order.
-        let mut order: Vec<usize> = (0..edges.len()).collect();
-        order.sort_unstable_by_key(|&e| edges[e]);
-        let edges: Vec<[u32; 2]> = order.iter().map(|&e| edges[e]).collect();
-        let edge_polygons: Vec<[u32; 2]> = order.iter().map(|&e| edge_polygons[e]).collect();
+        sides.sort_unstable();
+        let mut edges: Vec<[u32; 2]> = Vec::with_capacity(sides.len() / 2 + 1);
+        let mut edge_polygons: Vec<[u32; 2]> = Vec::with_capacity(sides.len() / 2 + 1);
+        for (k, &(key, p)) in sides.iter().enumerate() {
+            if k > 0 && sides[k - 1].0 == key {
+                // A later polygon of the same edge (the last one on a non-manifold edge).
+                edge_polygons.last_mut().expect("an edge")[1] = p;
+            } else {
+                edges.push([(key >> 32) as u32, key as u32]);
+                edge_polygons.push([p, u32::MAX]);
+            }
+        }
+        drop(sides);
         let length: Vec<f64> = edges
             .iter()
             .map(|e| norm(sub(chart.positions[e[1] as usize], chart.positions[e[0] as usize])))
@@ -223,5 +218,79 @@ pub fn other(graph: &ChartGraph, e: u32, v: u32) -> u32 {
         b
     } else {
         a
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 4 × 4 grid of unit cells as polygons: cell (0, 0) split into two triangles, cells
+    /// (1, 1) and (2, 1) merged into a hexagon, every other cell a quad.
+    fn mixed_grid() -> (Vec<[f64; 3]>, Vec<u32>, Vec<u32>) {
+        let n = 4u32;
+        let id = |i: u32, j: u32| j * (n + 1) + i;
+        let mut positions = Vec::new();
+        for j in 0..=n {
+            for i in 0..=n {
+                positions.push([i as f64, j as f64, 0.1 * ((i * j) % 3) as f64]);
+            }
+        }
+        let (mut corners, mut sizes) = (Vec::new(), Vec::new());
+        for j in 0..n {
+            for i in 0..n {
+                match (i, j) {
+                    (0, 0) => {
+                        corners.extend([id(0, 0), id(1, 0), id(1, 1), id(0, 0), id(1, 1), id(0, 1)]);
+                        sizes.extend([3, 3]);
+                    }
+                    (1, 1) => {
+                        corners.extend([id(1, 1), id(2, 1), id(3, 1), id(3, 2), id(2, 2), id(1, 2)]);
+                        sizes.push(6);
+                    }
+                    (2, 1) => {}
+                    _ => {
+                        corners.extend([id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)]);
+                        sizes.push(4);
+                    }
+                }
+            }
+        }
+        (positions, corners, sizes)
+    }
+
+    #[test]
+    fn every_polygon_side_is_one_edge_that_knows_its_polygons() {
+        let (positions, corners, sizes) = mixed_grid();
+        let mesh = PolyMesh::new(&positions, &corners, &sizes).expect("a valid mesh");
+        let charts = crate::charts::build_charts(&mesh, &[], None);
+        assert_eq!(charts.len(), 1);
+        let chart = &charts[0];
+        let g = ChartGraph::new(&mesh, chart);
+        assert_eq!(g.polygons.len(), sizes.len());
+        // Edge ids in vertex-pair order, each pair once.
+        assert!(g.edges.iter().all(|e| e[0] < e[1]));
+        assert!(g.edges.windows(2).all(|w| w[0] < w[1]));
+        // A disk: V − E + F = 1, and the outline is the grid's 16 sides.
+        assert_eq!(chart.positions.len() + g.polygons.len(), g.edges.len() + 1);
+        assert_eq!(g.edge_polygons.iter().filter(|p| p[1] == u32::MAX).count(), 16);
+        let mut sides = vec![0usize; g.edges.len()];
+        for (p, poly) in g.polygons.iter().enumerate() {
+            for i in 0..poly.len() {
+                let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
+                let e = g.edges.binary_search(&[a.min(b), a.max(b)]).expect("every side is an edge");
+                assert!(g.edge_polygons[e].contains(&(p as u32)), "polygon {p} missing from edge {e}");
+                sides[e] += 1;
+            }
+        }
+        for (e, pp) in g.edge_polygons.iter().enumerate() {
+            // Interior edges: two polygons, the first met first; outline edges: one.
+            if pp[1] == u32::MAX {
+                assert_eq!(sides[e], 1);
+            } else {
+                assert_eq!(sides[e], 2);
+                assert!(pp[0] < pp[1]);
+            }
+        }
     }
 }

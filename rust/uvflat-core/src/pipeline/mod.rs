@@ -157,7 +157,7 @@ fn road(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], depth: us
         let t = std::time::Instant::now();
         let s = crate::cuts::cones::ScaleSolver::new(chart);
         let predicted = s.as_ref().and_then(|s| crate::cuts::predicted_outside(chart, s, ctx.rule.max_stretch));
-        ctx.clock.add(|p| p.plan_cuts += t.elapsed().as_secs_f64());
+        ctx.clock.add(|p| p.plan(t, |p| &mut p.cut_state));
         if predicted.is_some_and(|o| o > triage::PREDICTED_BREAK) {
             let cutter = repair::cutter_with(ctx, chart, s);
             return repair::repair(ctx, chart, base_seams, depth, None, Some(cutter));

@@ -14,6 +14,15 @@ pub struct Phases {
     /// Planning cuts: the cutting state of each chart (edge graph, costs, scale system) and
     /// every round's cones and cut graph, with the rebuilt pieces (summed over charts).
     pub plan_cuts: f64,
+    /// Of `plan_cuts`: each chart's cutting state (edge graph, costs, occlusion rays, the
+    /// scale system) and the triage's predicted flattening of disks.
+    pub cut_state: f64,
+    /// Of `plan_cuts`: cone placement on the prediction ([`crate::pipeline::predict`]).
+    pub cone_placement: f64,
+    /// Of `plan_cuts`: the split candidates (spectral and planar loops).
+    pub split_plans: f64,
+    /// Of `plan_cuts`: every round's cones and cut graph, with the rebuilt pieces.
+    pub cut_graphs: f64,
     /// Solving, placing and checking charts as they are (the first solve of each chart).
     pub solve: f64,
     /// Solving, placing and checking the pieces of cuts, repair rounds and splits.
@@ -40,6 +49,15 @@ pub struct Phases {
     pub last_resort: usize,
     /// Per-face quality of the result (wall clock).
     pub measure: f64,
+}
+
+impl Phases {
+    /// Add the seconds since `t` to `plan_cuts` and to its part `part`.
+    pub fn plan(&mut self, t: std::time::Instant, part: impl FnOnce(&mut Phases) -> &mut f64) {
+        let s = t.elapsed().as_secs_f64();
+        self.plan_cuts += s;
+        *part(self) += s;
+    }
 }
 
 /// [`Phases`] shared by the charts of one unwrap.

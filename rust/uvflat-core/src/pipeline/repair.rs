@@ -49,12 +49,38 @@ use crate::mesh::PolyMesh;
 /// The cutting state of `chart` for [`repair`]: graph, costs and the scale system's analysis,
 /// made once (each round refactors numerically).
 pub fn cutter<'a>(ctx: &'a Context<'_, '_>, chart: &'a Chart) -> ChartCutter<'a> {
-    ChartCutter::with_cache(ctx.mesh, chart, &ctx.options.auto_seams, ctx.avoid, Some(&ctx.visibility))
+    with_proxy_beside(ctx, chart, || {
+        ChartCutter::with_cache(ctx.mesh, chart, &ctx.options.auto_seams, ctx.avoid, Some(&ctx.visibility))
+    })
 }
 
 /// [`cutter`] with the chart's scale system built already.
 pub fn cutter_with<'a>(ctx: &'a Context<'_, '_>, chart: &'a Chart, solver: Option<ScaleSolver>) -> ChartCutter<'a> {
-    ChartCutter::with_solver(ctx.mesh, chart, &ctx.options.auto_seams, ctx.avoid, Some(&ctx.visibility), solver)
+    with_proxy_beside(ctx, chart, || {
+        ChartCutter::with_solver(ctx.mesh, chart, &ctx.options.auto_seams, ctx.avoid, Some(&ctx.visibility), solver)
+    })
+}
+
+/// The cutter `make` builds, with the chart's coarse proxy ([`cuts::coarse::Proxy`]) decimated
+/// beside it when the plan will read it: a chart of [`cuts::coarse::PROXY_FROM`] triangles or
+/// more, planned on the prediction, with no mirror asked for (the proxy serves no mirrored
+/// chart). The decimation (0.4–0.5 s at 446k–576k triangles, on one thread) was otherwise the
+/// first round's, after the cutting state.
+fn with_proxy_beside<'a>(
+    ctx: &Context<'_, '_>,
+    chart: &'a Chart,
+    make: impl FnOnce() -> ChartCutter<'a> + Send,
+) -> ChartCutter<'a> {
+    let beside = chart.triangles.len() >= cuts::coarse::PROXY_FROM
+        && ctx.plans_on_prediction()
+        && ctx.options.auto_seams.symmetry == cuts::symmetry::Symmetry::None;
+    if !beside {
+        return make();
+    }
+    match rayon::join(make, || cuts::coarse::Proxy::new(chart)) {
+        (cutter, Some(proxy)) => cutter.with_proxy(proxy),
+        (cutter, None) => cutter,
+    }
 }
 
 /// Repair `chart` (already cut along `base_seams`). `first`: the chart solved as it is, if it
@@ -71,7 +97,7 @@ pub fn repair<'a>(
     let t = std::time::Instant::now();
     let mask = face_mask(ctx.mesh.n_faces(), chart);
     let mut cutter = cutter.unwrap_or_else(|| self::cutter(ctx, chart));
-    ctx.clock.add(|p| p.plan_cuts += t.elapsed().as_secs_f64());
+    ctx.clock.add(|p| p.plan(t, |p| &mut p.cut_state));
     let mut seed: Vec<u32> = Vec::new();
     let mut best: Vec<Piece> = Vec::new();
     if let Some(p) = first {
@@ -95,7 +121,7 @@ pub fn repair<'a>(
     } else {
         let t = std::time::Instant::now();
         let plan = super::predict::plan(ctx, chart, &cutter, &seed);
-        ctx.clock.add(|p| p.plan_cuts += t.elapsed().as_secs_f64());
+        ctx.clock.add(|p| p.plan(t, |p| &mut p.cone_placement));
         Some(plan)
     };
     let predicted_mean = plan.as_ref().map_or(f64::NAN, |p| p.mean_area);
@@ -118,7 +144,7 @@ pub fn repair<'a>(
         let list = cutter.split_candidates(ctx.avoid, last_level);
         // The halves make their own cutting state; a later round factors this one again.
         cutter.release_factors();
-        ctx.clock.add(|p| p.plan_cuts += t.elapsed().as_secs_f64());
+        ctx.clock.add(|p| p.plan(t, |p| &mut p.split_plans));
         if let Some(split) = list.first().filter(|s| !s.is_empty()).cloned() {
             let out = halves(ctx, chart, base_seams, &mask, depth, &split);
             ctx.clock.add(|p| p.predicted_splits += 1);
@@ -133,7 +159,7 @@ pub fn repair<'a>(
         // Read on the chart's proxy, left to here by the split that came first.
         let t = std::time::Instant::now();
         super::predict::confirm(ctx, &cutter, plan);
-        ctx.clock.add(|p| p.plan_cuts += t.elapsed().as_secs_f64());
+        ctx.clock.add(|p| p.plan(t, |p| &mut p.cone_placement));
     }
     let rounds = plan.as_ref().map_or(cuts::REPAIR_ROUNDS, |p| {
         if p.keeps_rule || ctx.options.method.balances_area() {
@@ -167,7 +193,7 @@ pub fn repair<'a>(
             // method's during the solve; a later round factors it again (about 0.7 s there).
             cutter.release_factors();
         }
-        ctx.clock.add(|p| p.plan_cuts += t.elapsed().as_secs_f64());
+        ctx.clock.add(|p| p.plan(t, |p| &mut p.cut_graphs));
         let t = std::time::Instant::now();
         let n_pieces = sub.len();
         let mut pieces: Vec<Piece> = Vec::with_capacity(sub.len());
@@ -256,7 +282,7 @@ pub fn repair<'a>(
         // The chart's cutting state (its graph, costs and the scale system's factor: 0.3 GB
         // on a 576k-triangle chart) is not needed by the halves, which make their own.
         drop(cutter);
-        ctx.clock.add(|p| p.plan_cuts += t.elapsed().as_secs_f64());
+        ctx.clock.add(|p| p.plan(t, |p| &mut p.split_plans));
         let tries = if last_level { candidates.len() } else { 1 };
         for split in candidates.into_iter().take(tries).filter(|s| !s.is_empty()) {
             let out = match presplit.take() {

@@ -205,7 +205,10 @@ class UnwrapResult:
     @property
     def phases(self) -> dict[str, float | int]:
         """Where the time went: ``build_charts``, ``plan_cuts``, ``solve``, ``repair_solve``,
-        ``measure`` (seconds; per-chart steps summed over threads) and the counts
+        ``measure`` (seconds; per-chart steps summed over threads), the parts of
+        ``plan_cuts`` (``cut_state``, ``cone_placement``, ``split_plans``, ``cut_graphs``:
+        each chart's cutting state, the cones placed on a predicted flattening, the split's
+        candidate loops, every round's cut graph with its pieces) and the counts
         ``predicted_rounds``, ``repair_rounds``, ``repair_pieces``, ``splits``,
         ``predicted_splits`` (splits made before any solve, the chart's predicted mean area
         distortion being too high), ``peels`` (large pieces whose outline crossed itself,
