@@ -338,8 +338,9 @@ impl ScaleSolver {
 ///
 /// The diagonal is summed per vertex in triangle order; the off-diagonal terms (three per
 /// triangle, two per interior edge, whose sum does not depend on their order) are merged by
-/// sorting packed `(col, row)` keys, then each column's diagonal is put before its rows. A
-/// stable sort of all nine terms per triangle cost 0.25–0.3 s at 460k triangles.
+/// sorting packed `(col, row)` keys, then each column's diagonal is put before its rows (a
+/// stable sort of all nine terms per triangle was 8% of the CPU time of 3holes subdivided
+/// three times, 460k triangles, with `abf`).
 pub(crate) fn cotan_laplacian(chart: &Chart) -> (Vec<(u32, u32, f64)>, Vec<f64>) {
     let n = chart.positions.len();
     let mut sums = vec![0.0f64; n];

@@ -11,8 +11,7 @@ use std::sync::Mutex;
 pub struct Phases {
     /// Validating the mesh and splitting it into charts (wall clock).
     pub build_charts: f64,
-    /// Planning cuts: the cutting state of each chart (edge graph, costs, scale system) and
-    /// every round's cones and cut graph, with the rebuilt pieces (summed over charts).
+    /// Planning cuts (summed over charts): the sum of the four parts below.
     pub plan_cuts: f64,
     /// Of `plan_cuts`: each chart's cutting state (edge graph, costs, occlusion rays, the
     /// scale system) and the triage's predicted flattening of disks.
