@@ -193,12 +193,15 @@ fn work_beside_a_large_start_changes_nothing() {
     }
     // Factorizations sequential, as `unwrap` has them (faer's parallel kernels sum in an order
     // that depends on the threads).
+    // The setting is global: restored for the other tests of this file.
+    let before = faer::get_global_parallelism();
     faer::set_global_parallelism(faer::Par::Seq);
     let run = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         pool.install(|| slim::solve(&chart, &[], &SlimOptions { max_iterations: 3, ..Default::default() }).unwrap())
     };
     let (one, two) = (run(1), run(2));
+    faer::set_global_parallelism(before);
     assert!(one.fallback.is_none() && least_area(&chart, &two.uv) > 0.0);
     let d = max_difference(&one.uv, &two.uv);
     assert!(d == 0.0, "SLIM's map depends on the threads: {d:e}, {:?} / {:?}", one.note, two.note);
