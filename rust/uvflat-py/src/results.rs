@@ -45,7 +45,8 @@ pub struct PyChartReport {
     pub residual: f64,
     /// Flipped or zero-area UV triangles.
     pub flips: usize,
-    /// Whether the chart's UV boundary crosses itself.
+    /// Whether the chart's UV boundary crosses or touches itself (the two sides of one cut lying
+    /// on each other, triangles apart, do not count).
     pub overlap: bool,
     /// Conformal distortion (area-weighted mean of sigma1/sigma2; 1 is perfect; NaN if failed).
     pub conformal: f64,
@@ -193,7 +194,8 @@ impl PyUnwrapResult {
     /// place cones on a predicted flattening), ``split_plans`` (the split's candidate loops)
     /// and ``cut_graphs`` (every round's cones and cut graph, with the pieces rebuilt), and the
     /// counts ``predicted_rounds`` (cones planned on a predicted flattening, nothing solved),
-    /// ``repair_rounds``, ``repair_pieces``, ``splits``, ``predicted_splits`` (splits made
+    /// ``repair_rounds``, ``repair_pieces``, ``splits``, ``crease_cuts`` (hard-surface charts
+    /// cut along their creases first), ``predicted_splits`` (splits made
     /// before any solve, the chart's predicted mean area distortion being too high),
     /// ``peels`` (large pieces whose outline crossed itself, made valid by making the faces
     /// there islands of their own) and ``last_resort`` (solves of the last
@@ -216,6 +218,7 @@ impl PyUnwrapResult {
         d.set_item("repair_rounds", p.repair_rounds)?;
         d.set_item("repair_pieces", p.repair_pieces)?;
         d.set_item("splits", p.splits)?;
+        d.set_item("crease_cuts", p.crease_cuts)?;
         d.set_item("predicted_splits", p.predicted_splits)?;
         d.set_item("peels", p.peels)?;
         d.set_item("last_resort", p.last_resort)?;

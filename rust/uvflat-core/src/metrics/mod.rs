@@ -15,6 +15,7 @@
 //!   still counted as flips when their UV triangle has zero area); a chart with no 3D area at
 //!   all has every triangle counted as a flip and infinite distortion, never NaN.
 
+pub mod closed_seams;
 pub mod density;
 
 pub use density::{density_spread, DensitySpread, DEFAULT_DENSITY_BOUND};
@@ -48,7 +49,8 @@ pub struct ChartMetrics {
     pub faces: usize,
     /// Flipped plus zero-area UV triangles.
     pub flips: usize,
-    /// Whether the UV boundary crosses or touches itself.
+    /// Whether the UV boundary crosses or touches itself, other than where the two sides of
+    /// one cut lie on each other ([`closed_seams`]: the same surface points share those texels).
     pub overlap: bool,
     /// Distortion of the chart, area-normalised.
     pub distortion: Distortion,
@@ -327,7 +329,7 @@ pub fn chart_metrics(
         return ChartMetrics {
             faces: triangles.len(),
             flips: triangles.len(),
-            overlap: boundary_self_overlap(uv, boundary_loops),
+            overlap: closed_seams::outline_overlap(positions, triangles, uv, boundary_loops),
             distortion: Distortion { conformal: f64::INFINITY, area: f64::INFINITY, symmetric_dirichlet: f64::INFINITY },
             area_3d: 0.0,
             density: density::spread_of(vec![(0.0, 0.0); triangles.len()], DEFAULT_DENSITY_BOUND),
@@ -355,7 +357,7 @@ pub fn chart_metrics(
             sum = [f64::INFINITY; 3];
         }
     }
-    let overlap = boundary_self_overlap(uv, boundary_loops);
+    let overlap = closed_seams::outline_overlap(positions, triangles, uv, boundary_loops);
     ChartMetrics {
         faces: triangles.len(),
         flips,
@@ -459,6 +461,18 @@ pub fn boundary_crossings(uv: &[[f64; 2]], loops: &[Vec<u32>], limit: usize) -> 
 
 /// [`boundary_crossings`] with the brute-force threshold of [`self_overlap_with`].
 fn boundary_crossings_with(uv: &[[f64; 2]], loops: &[Vec<u32>], brute_force: usize, limit: usize) -> Vec<[[u32; 2]; 2]> {
+    boundary_crossings_except(uv, loops, brute_force, limit, &|_, _| false)
+}
+
+/// [`boundary_crossings_with`], leaving out the pairs of segments without a chart vertex in
+/// common that `benign` accepts (it is asked only about pairs that cross or touch).
+pub(crate) fn boundary_crossings_except(
+    uv: &[[f64; 2]],
+    loops: &[Vec<u32>],
+    brute_force: usize,
+    limit: usize,
+    benign: &dyn Fn([u32; 2], [u32; 2]) -> bool,
+) -> Vec<[[u32; 2]; 2]> {
     let mut segs: Vec<(u32, u32)> = Vec::new();
     for lp in loops {
         for i in 0..lp.len() {
@@ -506,7 +520,7 @@ fn boundary_crossings_with(uv: &[[f64; 2]], loops: &[Vec<u32>], brute_force: usi
             let v = [b[0] - o[0], b[1] - o[1]];
             return cross2(u, v) == 0.0 && u[0] * v[0] + u[1] * v[1] > 0.0;
         }
-        segments_intersect(p1, p2, p3, p4)
+        segments_intersect(p1, p2, p3, p4) && !benign([s.0, s.1], [t.0, t.1])
     };
     // Small outlines (the many tiny charts of a Smart UV Project cut): every pair, no grid.
     let mut found: Vec<(usize, usize)> = Vec::new();

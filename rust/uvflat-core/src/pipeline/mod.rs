@@ -13,6 +13,9 @@
 //!    A disk is cut first when its predicted flattening ([`crate::cuts::predicted_outside`])
 //!    breaks Max Stretch by far (under a method that balances area, only with
 //!    [`crate::cuts::AutoSeamOptions::same_seams`]).
+//!    A hard surface (flat or rolled everywhere but along its creases, with more curved
+//!    vertices than cones) is first cut along its creases ([`creases`]), each region taking
+//!    the road on its own.
 //! 2. Plan cuts: [`crate::cuts::ChartCutter`] (cones on the conformal scale factor, handle
 //!    loops, holes and cones joined to the outline by a Steiner tree of low-cost edges), and
 //!    [`predict::plan`]: more cones while the predicted flattening of a piece breaks Max
@@ -34,6 +37,7 @@
 //! A new step is one file here; the outcome of every chart is a typed value
 //! ([`outcome::ChartStatus`], [`outcome::Problem`]).
 
+pub mod creases;
 pub mod last_resort;
 pub mod outcome;
 pub mod peel;
@@ -145,6 +149,15 @@ pub(crate) fn run(ctx: &Context<'_, '_>, chart: Chart, base_seams: &[[u32; 2]], 
 
 fn road(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], depth: usize) -> Vec<Piece> {
     let road = triage::triage(chart, ctx.options.auto_seams.enabled, pinned(ctx, chart));
+    if road != Triage::Solve {
+        // A hard surface is cut along its creases first; its regions take the road anew.
+        let t = std::time::Instant::now();
+        let creases = creases::crease_seams(ctx, chart);
+        ctx.clock.add(|p| p.plan(t, |p| &mut p.cut_state));
+        if let Some(creases) = creases {
+            return creases::regions(ctx, chart, base_seams, depth, &creases);
+        }
+    }
     if road == Triage::Cut {
         return repair::repair(ctx, chart, base_seams, depth, None, None);
     }

@@ -18,7 +18,7 @@
 //!    a second try, the other). The patch is the faces within `r` rings (by shared vertices) of the
 //!    peeled triangles' vertices, for `r` in [`RINGS`], never more than [`MAX_PATCH_SHARE`]
 //!    of the piece's faces. An outline that only touches itself overlaps no triangle: the
-//!    touching segments ([`crate::metrics::boundary_crossings`]) stand in for them;
+//!    touching segments ([`crate::metrics::closed_seams::outline_crossings`]) stand in for them;
 //! 2. the piece rebuilt with the patch's border as seams: the rest keeps its UVs and is
 //!    measured again, the patch's pieces are solved with the method;
 //! 3. the first attempt whose pieces all keep the rule replaces the piece, its border added
@@ -116,7 +116,9 @@ fn peel(ctx: &Context<'_, '_>, chart: &Chart, piece: &Piece) -> Option<Vec<Piece
     // segments of one side.
     let mut sides = overlap_sides(chart, uv);
     if sides.iter().all(|s| s.is_empty()) {
-        let touching = crate::metrics::boundary_crossings(uv, &chart.boundary_loops, MAX_TOUCHES);
+        let loops = &chart.boundary_loops;
+        let touching =
+            crate::metrics::closed_seams::outline_crossings(&chart.positions, &chart.triangles, uv, loops, MAX_TOUCHES);
         sides = [0, 1].map(|k| touching.iter().flat_map(|c| c[k]).collect());
     }
     for seeds in sides.iter().filter(|s| !s.is_empty()) {

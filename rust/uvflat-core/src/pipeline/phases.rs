@@ -14,7 +14,7 @@ pub struct Phases {
     /// Planning cuts (summed over charts): the sum of the four parts below.
     pub plan_cuts: f64,
     /// Of `plan_cuts`: each chart's cutting state (edge graph, costs, occlusion rays, the
-    /// scale system) and the triage's predicted flattening of disks.
+    /// scale system), the triage's predicted flattening of disks and the test for creases.
     pub cut_state: f64,
     /// Of `plan_cuts`: cone placement on the prediction ([`crate::pipeline::predict`]).
     pub cone_placement: f64,
@@ -35,6 +35,9 @@ pub struct Phases {
     pub predicted_rounds: usize,
     /// Charts halved by the last-resort split.
     pub splits: usize,
+    /// Hard-surface charts cut along their creases before anything else
+    /// ([`crate::pipeline::creases`]).
+    pub crease_cuts: usize,
     /// Of `splits`, those made before any solve of the chart, because the prediction kept
     /// the rule with a mean area distortion above
     /// [`crate::pipeline::repair::MEAN_AREA_LIMIT`].

@@ -317,6 +317,20 @@ fn halves(
     split: &[[u32; 2]],
 ) -> Vec<Piece> {
     ctx.clock.add(|p| p.splits += 1);
+    take_apart(ctx, chart, base_seams, mask, depth + 1, split)
+}
+
+/// The pieces of `chart` (faces `mask`) cut along `split` (mesh vertex pairs), each taken
+/// through the pipeline's road again at split depth `depth`, in piece order; the cut's seams
+/// go with the first.
+pub(crate) fn take_apart(
+    ctx: &Context<'_, '_>,
+    chart: &Chart,
+    base_seams: &[[u32; 2]],
+    mask: &[bool],
+    depth: usize,
+    split: &[[u32; 2]],
+) -> Vec<Piece> {
     let mut all: Vec<[u32; 2]> = base_seams.to_vec();
     all.extend_from_slice(split);
     let halves = build_charts_with(ctx.mesh, &all, Some(mask), ctx.render);
@@ -332,14 +346,14 @@ fn halves(
     let lists: Vec<Vec<Piece>> = if in_turn {
         // Large halves of SLIM, ARAP or scaffold one after the other: two of their solves
         // at once raised the peak memory.
-        halves.into_iter().map(|h| super::run(ctx, h, &all, depth + 1)).collect()
+        halves.into_iter().map(|h| super::run(ctx, h, &all, depth)).collect()
     } else {
         use rayon::prelude::*;
         halves
             .into_par_iter()
             .map(|h| {
                 let _guard = progress.as_ref().map(|p| p.enter());
-                super::run(ctx, h, &all, depth + 1)
+                super::run(ctx, h, &all, depth)
             })
             .collect()
     };
@@ -550,7 +564,7 @@ fn piece_to_original(original: &Chart, chart: &Chart) -> Vec<u32> {
 }
 
 /// Faces of `chart` as a selection mask over the mesh.
-fn face_mask(n_faces: usize, chart: &Chart) -> Vec<bool> {
+pub(crate) fn face_mask(n_faces: usize, chart: &Chart) -> Vec<bool> {
     let mut mask = vec![false; n_faces];
     for &f in &chart.faces {
         mask[f as usize] = true;

@@ -122,7 +122,8 @@ class ChartReport:
         strictly convex in UV counts as folded (either diagonal split flips)."""
     @property
     def overlap(self) -> bool:
-        """Whether the chart's UV boundary crosses itself."""
+        """Whether the chart's UV boundary crosses or touches itself (the two sides of one cut
+        lying on each other, triangles apart, do not count)."""
     @property
     def conformal(self) -> float:
         """Conformal distortion, area-weighted mean of sigma1/sigma2 (1 is perfect; NaN if failed)."""
@@ -210,6 +211,7 @@ class UnwrapResult:
         each chart's cutting state, the cones placed on a predicted flattening, the split's
         candidate loops, every round's cut graph with its pieces) and the counts
         ``predicted_rounds``, ``repair_rounds``, ``repair_pieces``, ``splits``,
+        ``crease_cuts`` (hard-surface charts cut along their creases first),
         ``predicted_splits`` (splits made before any solve, the chart's predicted mean area
         distortion being too high), ``peels`` (large pieces whose outline crossed itself,
         made valid by making the faces there islands of their own), ``last_resort`` (solves of the last resort, the method's flip-free kin then ``scaffold``,

@@ -1,0 +1,269 @@
+//! Closed seams: an outline that meets itself only where the two sides of one cut lie on each
+//! other is not an overlap.
+//!
+//! A cut copies its vertices: each copy keeps the 3D position of the vertex it was cut from.
+//! Where a map lays the two sides of a cut exactly on each other (the exact unfolding of flat
+//! surface does, for a cut that joins a hole to the outline: a flat face with a hole comes
+//! out as it is, its seam closed), the outline touches itself, yet every texel there belongs
+//! to one surface point: the same point, reached from either side of the seam. Such a
+//! contact is benign, and [`outline_overlap`] does not count it, when:
+//!
+//! * the two segments are copies of one 3D edge on the same UV segment (their ends, matched
+//!   by 3D position, at the same UVs), or they meet only at one point where two copies of one
+//!   3D vertex sit on the same UV (and do not run along each other from there); "the same
+//!   UV" within [`TWIN_TOLERANCE`] of the outline's extent, as an unfolding reaches the two
+//!   copies along different strips of triangles; and
+//! * the triangles around the two copies at each such point do not overlap (their interiors
+//!   are disjoint, by separating axes): the two sides of the seam lie on either side of it.
+//!
+//! Every other contact counts as in [`super::boundary_self_overlap`]: crossings, touches of
+//! different surface points, a seam's sides lying on each other only nearly (its copies
+//! further apart than the tolerance). Flips are counted apart ([`super::flipped_triangles`]).
+//!
+//! Preconditions: `positions`, `triangles`, `uv` and `loops` of one chart (copies of a cut
+//! vertex carry identical positions, as [`crate::charts`] makes them). Deterministic.
+
+use super::{boundary_crossings_except, orient, BRUTE_FORCE_SEGMENTS};
+
+/// Whether the outline of the chart crosses or touches itself other than along closed seams
+/// (see the module docs).
+pub fn outline_overlap(positions: &[[f64; 3]], triangles: &[[u32; 3]], uv: &[[f64; 2]], loops: &[Vec<u32>]) -> bool {
+    !outline_crossings(positions, triangles, uv, loops, 1).is_empty()
+}
+
+/// The pairs of outline segments that cross or touch other than along closed seams, as
+/// [`super::boundary_crossings`] lists them, up to `limit` pairs.
+pub fn outline_crossings(
+    positions: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    uv: &[[f64; 2]],
+    loops: &[Vec<u32>],
+    limit: usize,
+) -> Vec<[[u32; 2]; 2]> {
+    let twins = Twins::new(positions, triangles, uv, loops);
+    boundary_crossings_except(uv, loops, BRUTE_FORCE_SEGMENTS, limit, &|s, t| twins.benign(s, t))
+}
+
+/// The outline's vertices grouped by 3D position, and the triangles around each vertex
+/// (made on first use: most outlines never touch themselves).
+struct Twins<'a> {
+    triangles: &'a [[u32; 3]],
+    uv: &'a [[f64; 2]],
+    /// Per chart vertex on the outline: the lowest outline vertex at the same 3D position
+    /// (`u32::MAX` off the outline).
+    key: Vec<u32>,
+    /// Triangles around each vertex (CSR: starts, then triangle ids).
+    around: std::sync::OnceLock<(Vec<u32>, Vec<u32>)>,
+    /// How far apart two copies' UVs may be and still count as one point: [`TWIN_TOLERANCE`]
+    /// of the outline's extent.
+    tolerance: f64,
+}
+
+/// Copies of one vertex count as one UV point within this share of the outline's extent (an
+/// exact unfolding reaches them along different strips of triangles, a few units in the last
+/// place apart).
+pub const TWIN_TOLERANCE: f64 = 1e-9;
+
+impl<'a> Twins<'a> {
+    fn new(positions: &[[f64; 3]], triangles: &'a [[u32; 3]], uv: &'a [[f64; 2]], loops: &[Vec<u32>]) -> Self {
+        let mut key = vec![u32::MAX; positions.len()];
+        let mut outline: Vec<u32> =
+            loops.iter().flatten().copied().filter(|&v| (v as usize) < positions.len()).collect();
+        let bits = |v: u32| positions[v as usize].map(f64::to_bits);
+        outline.sort_unstable_by(|&a, &b| bits(a).cmp(&bits(b)).then(a.cmp(&b)));
+        outline.dedup();
+        for run in outline.chunk_by(|&a, &b| bits(a) == bits(b)) {
+            for &v in run {
+                key[v as usize] = run[0];
+            }
+        }
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for &v in &outline {
+            let p = uv[v as usize];
+            lo = [lo[0].min(p[0]), lo[1].min(p[1])];
+            hi = [hi[0].max(p[0]), hi[1].max(p[1])];
+        }
+        let tolerance = TWIN_TOLERANCE * (hi[0] - lo[0]).max(hi[1] - lo[1]).max(0.0);
+        Twins { triangles, uv, key, around: std::sync::OnceLock::new(), tolerance }
+    }
+
+    /// Two different copies of one 3D vertex at the same UV (within the tolerance).
+    fn twins(&self, a: u32, b: u32) -> bool {
+        let (ka, kb) = (self.key[a as usize], self.key[b as usize]);
+        let (p, q) = (self.uv[a as usize], self.uv[b as usize]);
+        a != b && ka != u32::MAX && ka == kb && (p[0] - q[0]).abs().max((p[1] - q[1]).abs()) <= self.tolerance
+    }
+
+    /// Whether segments `s` and `t` (no chart vertex in common; they cross or touch) meet
+    /// only along a closed seam (see the module docs).
+    fn benign(&self, s: [u32; 2], t: [u32; 2]) -> bool {
+        let meet: Vec<(u32, u32)> =
+            s.iter().flat_map(|&a| t.iter().map(move |&b| (a, b))).filter(|&(a, b)| self.twins(a, b)).collect();
+        let contact = match meet.len() {
+            // Copies of one 3D edge on the same UV segment.
+            2 if meet[0].0 != meet[1].0 && meet[0].1 != meet[1].1 => true,
+            // One shared point: the segments must leave it in different directions.
+            1 => {
+                let (a, b) = meet[0];
+                let p = self.uv[a as usize];
+                let s_other = self.uv[if s[0] == a { s[1] } else { s[0] } as usize];
+                let t_other = self.uv[if t[0] == b { t[1] } else { t[0] } as usize];
+                let (u, v) = ([s_other[0] - p[0], s_other[1] - p[1]], [t_other[0] - p[0], t_other[1] - p[1]]);
+                orient(p, s_other, t_other) != 0.0 || u[0] * v[0] + u[1] * v[1] < 0.0
+            }
+            _ => false,
+        };
+        contact && meet.iter().all(|&(a, b)| !self.fans_overlap(a, b))
+    }
+
+    /// Whether a triangle around `a` and one around `b` overlap (interiors, by separating
+    /// axes; triangles that share only an edge or a point do not).
+    fn fans_overlap(&self, a: u32, b: u32) -> bool {
+        let (start, ids) = self.around.get_or_init(|| {
+            let n = self.uv.len();
+            let mut start = vec![0u32; n + 1];
+            for t in self.triangles {
+                for &v in t {
+                    start[v as usize + 1] += 1;
+                }
+            }
+            for v in 0..n {
+                start[v + 1] += start[v];
+            }
+            let mut fill = start.clone();
+            let mut ids = vec![0u32; start[n] as usize];
+            for (k, t) in self.triangles.iter().enumerate() {
+                for &v in t {
+                    ids[fill[v as usize] as usize] = k as u32;
+                    fill[v as usize] += 1;
+                }
+            }
+            (start, ids)
+        });
+        let fan = |v: u32| &ids[start[v as usize] as usize..start[v as usize + 1] as usize];
+        let corners = |k: u32| self.triangles[k as usize].map(|v| self.uv[v as usize]);
+        fan(a).iter().any(|&x| fan(b).iter().any(|&y| x != y && interiors_overlap(corners(x), corners(y))))
+    }
+}
+
+/// Whether the interiors of two UV triangles overlap: no edge direction of either separates
+/// them (touching along an edge or at a point is no overlap; a tolerance of 1e-12 of their
+/// size absorbs rounding where they touch).
+fn interiors_overlap(p: [[f64; 2]; 3], q: [[f64; 2]; 3]) -> bool {
+    let size = p.iter().chain(&q).fold(0.0f64, |m, c| m.max(c[0].abs()).max(c[1].abs())).max(f64::MIN_POSITIVE);
+    for tri in [p, q] {
+        for k in 0..3 {
+            let (a, b) = (tri[k], tri[(k + 1) % 3]);
+            let n = [a[1] - b[1], b[0] - a[0]];
+            let len = n[0].hypot(n[1]);
+            if !(len > 0.0) {
+                continue;
+            }
+            let span = |t: &[[f64; 2]; 3]| {
+                t.iter()
+                    .map(|c| (c[0] * n[0] + c[1] * n[1]) / len)
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| (l.min(x), h.max(x)))
+            };
+            let ((lo_p, hi_p), (lo_q, hi_q)) = (span(&p), span(&q));
+            let tol = 1e-12 * size;
+            if hi_p <= lo_q + tol || hi_q <= lo_p + tol {
+                return false;
+            }
+        }
+    }
+    true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A flat 3×3 grid of unit squares whose middle square is a hole, cut from the hole's
+    /// corner (1, 1) straight down to the outline at (1, 0): each cut vertex is copied.
+    /// Returns positions, triangles, the outline (one loop after the cut) and the copies.
+    fn slit_square() -> (Vec<[f64; 3]>, Vec<[u32; 3]>, Vec<Vec<u32>>) {
+        // Vertices (x, y) for x, y in 0..=3 at id 4y + x; copies of (1,0) and (1,1) at 16, 17.
+        let mut pos: Vec<[f64; 3]> = (0..16).map(|i| [(i % 4) as f64, (i / 4) as f64, 0.0]).collect();
+        pos.push([1.0, 0.0, 0.0]); // 16: copy of 1
+        pos.push([1.0, 1.0, 0.0]); // 17: copy of 5
+        let mut tris = Vec::new();
+        for y in 0..3u32 {
+            for x in 0..3u32 {
+                if (x, y) == (1, 1) {
+                    continue; // the hole
+                }
+                let (mut a, b, c, mut d) = (4 * y + x, 4 * y + x + 1, 4 * (y + 1) + x + 1, 4 * (y + 1) + x);
+                // The square right of the cut (x = 1, y = 0) uses the copies on its left side.
+                if (x, y) == (1, 0) {
+                    a = 16;
+                    d = 17;
+                }
+                tris.push([a, b, c]);
+                tris.push([a, c, d]);
+            }
+        }
+        // One outline: along the bottom from the cut's right copy, round the outside, back along
+        // the bottom to the cut's left side, up the cut, round the hole, down the cut's right
+        // copy.
+        let outline = vec![16, 2, 3, 7, 11, 15, 14, 13, 12, 8, 4, 0, 1, 5, 9, 10, 6, 17];
+        (pos, tris, vec![outline])
+    }
+
+    fn uv_of(pos: &[[f64; 3]]) -> Vec<[f64; 2]> {
+        pos.iter().map(|p| [p[0], p[1]]).collect()
+    }
+
+    #[test]
+    fn a_seam_closed_on_flat_surface_is_no_overlap_but_an_outline_touch() {
+        let (pos, tris, loops) = slit_square();
+        let uv = uv_of(&pos);
+        assert!(super::super::flipped_triangles(&tris, &uv).iter().all(|&f| !f));
+        // The plain check sees the two sides of the cut touching.
+        assert!(super::super::boundary_self_overlap(&uv, &loops));
+        assert!(!outline_overlap(&pos, &tris, &uv, &loops));
+    }
+
+    #[test]
+    fn copies_apart_or_different_points_touching_still_overlap() {
+        let (pos, tris, loops) = slit_square();
+        // The cut's right side moved over its left side: copies at different UVs whose
+        // triangles overlap along the seam, by more than the tolerance and by less.
+        for shift in [1e-6, 1e-9] {
+            let mut uv = uv_of(&pos);
+            uv[16][0] -= shift;
+            uv[17][0] -= shift;
+            assert!(outline_overlap(&pos, &tris, &uv, &loops), "{shift}");
+        }
+        // Over each other by rounding only, within the tolerance: a closed seam.
+        let mut uv = uv_of(&pos);
+        uv[16][0] -= 1e-15;
+        uv[17][0] -= 1e-15;
+        assert!(!outline_overlap(&pos, &tris, &uv, &loops));
+        // The same layout with the copies told apart in 3D (two surface points that touch).
+        let mut apart = pos.clone();
+        apart[16][2] = 1e-3;
+        apart[17][2] = 1e-3;
+        assert!(outline_overlap(&apart, &tris, &uv_of(&pos), &loops));
+    }
+
+    #[test]
+    fn a_closed_seam_whose_sides_fold_onto_each_other_overlaps() {
+        let (pos, tris, loops) = slit_square();
+        // Fold the square right of the cut over onto the square left of it: the cut's two
+        // sides still coincide, but triangles on both sides now cover the same UVs.
+        let mut uv = uv_of(&pos);
+        uv[2] = [0.0, 0.0];
+        uv[6] = [0.0, 1.0];
+        assert!(super::super::flipped_triangles(&tris, &uv).iter().any(|&f| f));
+        assert!(outline_overlap(&pos, &tris, &uv, &loops));
+    }
+
+    #[test]
+    fn separating_axes_tell_touching_from_overlapping_triangles() {
+        let t = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
+        assert!(!interiors_overlap(t, [[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]])); // a shared edge
+        assert!(!interiors_overlap(t, [[0.0, 0.0], [-1.0, 0.0], [0.0, -1.0]])); // a shared point
+        assert!(interiors_overlap(t, [[0.2, 0.2], [2.0, 0.2], [0.2, 2.0]]));
+        assert!(interiors_overlap(t, t));
+    }
+}

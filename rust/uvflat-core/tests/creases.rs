@@ -1,0 +1,118 @@
+//! Hard surfaces cut along their creases (`pipeline/creases.rs`): a cylinder with n-gon caps
+//! comes out as two caps and an unrolled side, undistorted, with the same seams under every
+//! method; charts the cones already unfold, organic charts, and charts where the creases
+//! touch an avoided vertex keep the road they had.
+
+use std::collections::BTreeSet;
+
+use uvflat_core::{unwrap, ChartStatus, Method, UnwrapOptions};
+
+mod common;
+
+use common::Soup;
+
+/// A closed cylinder of radius 1 and height `h`: `n`-gon caps on the side of `rings` rows of
+/// `n` quads ([`common::cut_cylinder`], its seam left out), wound outwards.
+fn capped_cylinder(n: usize, rings: usize, h: f64) -> Soup {
+    let (mut s, _) = common::cut_cylinder(n, rings, h);
+    let at = |j: usize, i: usize| (j * n + i % n) as u32;
+    s.corner_verts.extend((0..n).rev().map(|i| at(0, i)));
+    s.face_sizes.push(n as u32);
+    s.corner_verts.extend((0..n).map(|i| at(rings, i)));
+    s.face_sizes.push(n as u32);
+    s
+}
+
+fn abf() -> Method {
+    Method::parse("abf", &[]).unwrap()
+}
+
+fn run(s: &Soup, method: Method, f: impl FnOnce(&mut UnwrapOptions)) -> uvflat_core::Unwrapped {
+    let mut o = UnwrapOptions { method, ..Default::default() };
+    f(&mut o);
+    unwrap(&s.input(), &o).expect("unwrap")
+}
+
+/// The cylinder's rim edges (both caps' outlines) as sorted vertex pairs.
+fn rims(n: usize, rings: usize) -> BTreeSet<[u32; 2]> {
+    let mut out = BTreeSet::new();
+    for j in [0, rings] {
+        for i in 0..n {
+            let (a, b) = ((j * n + i) as u32, (j * n + (i + 1) % n) as u32);
+            out.insert([a.min(b), a.max(b)]);
+        }
+    }
+    out
+}
+
+#[test]
+fn a_capped_cylinder_is_two_caps_and_an_unrolled_side_under_every_method() {
+    let (n, rings) = (32, 3);
+    let s = capped_cylinder(n, rings, 2.0);
+    let mut seams_of = Vec::new();
+    for method in ["abf", "slim", "lscm", "mips"].map(|m| Method::parse(m, &[]).unwrap()) {
+        let name = method.name();
+        let r = run(&s, method, |_| {});
+        assert_eq!(r.phases.crease_cuts, 1, "{name}");
+        assert_eq!(r.charts.len(), 3, "{name}: {:?}", r.charts.iter().map(|c| c.triangles).collect::<Vec<_>>());
+        for c in &r.charts {
+            assert_eq!(c.status, ChartStatus::Solved, "{name}: {:?}", c.reason);
+            assert_eq!(c.method, name);
+            // Laid flat as they are: caps and the side unrolled without distortion.
+            let d = c.distortion;
+            assert!(d.conformal < 1.0 + 1e-6 && d.area < 1.0 + 1e-6, "{name}: {d:?}");
+        }
+        let seams: BTreeSet<[u32; 2]> = r.new_seams.iter().copied().collect();
+        // Both rims, and one line of `rings` edges down the side.
+        let rim = rims(n, rings);
+        assert!(rim.is_subset(&seams), "{name}");
+        let side: Vec<_> = seams.difference(&rim).collect();
+        assert_eq!(side.len(), rings, "{name}: {side:?}");
+        for e in side {
+            let (a, b) = (e[0] as usize, e[1] as usize);
+            assert_eq!(a % n, b % n, "{name}: a side seam runs along the height: {e:?}");
+        }
+        seams_of.push(seams);
+    }
+    assert!(seams_of.windows(2).all(|w| w[0] == w[1]), "the same seams whatever the method");
+}
+
+#[test]
+fn charts_the_cones_unfold_or_that_are_curved_keep_their_road() {
+    // A cube: 8 curved corners, no more than Max Cones: its cones unfold it in one net.
+    let r = run(&common::cube(4), abf(), |_| {});
+    assert_eq!(r.phases.crease_cuts, 0);
+    assert_eq!(r.charts.len(), 1);
+    // A sphere has no creases; a cube projected on the sphere has curvature everywhere.
+    let r = run(&common::cube_sphere(8), abf(), |_| {});
+    assert_eq!(r.phases.crease_cuts, 0);
+    // With room for every curved vertex as a cone, the cylinder keeps the cones' road too.
+    let s = capped_cylinder(16, 1, 1.0);
+    let r = run(&s, abf(), |o| o.auto_seams.max_cones = 64);
+    assert_eq!(r.phases.crease_cuts, 0);
+    // Creases touching an avoided vertex are not cut wholesale.
+    let r = run(&s, abf(), |o| o.auto_seams.avoid_vertices = vec![0]);
+    assert_eq!(r.phases.crease_cuts, 0);
+    assert!(r.new_seams.iter().all(|e| e[0] != 0 && e[1] != 0));
+    // Without automatic seams nothing is cut.
+    let r = run(&s, abf(), |o| o.auto_seams.enabled = false);
+    assert_eq!(r.phases.crease_cuts, 0);
+    assert!(r.new_seams.is_empty());
+}
+
+#[test]
+fn a_bent_cylinder_is_not_developable_and_keeps_the_cones_road() {
+    // The same cylinder with its side bulged: the side's inner vertices are curved, so
+    // cutting the creases would leave curved regions; the chart is planned with cones.
+    let mut s = capped_cylinder(32, 6, 2.0);
+    for p in &mut s.positions {
+        let bulge = 1.0 + 0.3 * (std::f64::consts::PI * p[2] / 2.0).sin();
+        p[0] *= bulge;
+        p[1] *= bulge;
+    }
+    let r = run(&s, abf(), |_| {});
+    assert_eq!(r.phases.crease_cuts, 0);
+    for c in &r.charts {
+        assert!(c.flips == 0 && !c.overlap && c.density.outside <= 0.05 + 1e-9, "{c:?}");
+    }
+}

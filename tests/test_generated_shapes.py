@@ -1,0 +1,177 @@
+"""Meshes built in real Blender the way users build them (primitives, boolean CAD parts, text,
+modifier stacks): automatic seams keep the atlas rule on every island, with ``abf``, ``slim``
+and ``lscm``. The shapes come from ``blender_scripts/shapes.py``; nothing here reads the shared
+meshes, so these run on any machine."""
+
+from __future__ import annotations
+
+import sys
+import types
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import uvflat
+
+REPO = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(REPO / "blender_scripts"))
+
+import shapes  # noqa: E402
+
+bpy = pytest.importorskip("bpy")
+
+
+@pytest.fixture(scope="module")
+def built():
+    """Every shape, built once (the objects are removed again after reading them)."""
+    return {name: shapes.make(name) for name in shapes.SHAPES}
+
+
+def euler_and_parts(cv, fs):
+    """``(V − E + F, connected parts, boundary edges)`` of a polygon mesh."""
+    starts = np.concatenate([[0], np.cumsum(fs)[:-1]])
+    edges = {}
+    parent = list(range(int(cv.max()) + 1))
+
+    def find(x):
+        while parent[x] != x:
+            parent[x] = parent[parent[x]]
+            x = parent[x]
+        return x
+
+    for s, n in zip(starts, fs):
+        f = cv[s:s + n]
+        for k in range(n):
+            a, b = int(f[k]), int(f[(k + 1) % n])
+            e = (min(a, b), max(a, b))
+            edges[e] = edges.get(e, 0) + 1
+            parent[find(a)] = find(b)
+    used = np.unique(cv)
+    parts = len({find(int(v)) for v in used})
+    boundary = sum(1 for m in edges.values() if m == 1)
+    return len(used) - len(edges) + len(fs), parts, boundary
+
+
+@pytest.mark.parametrize("name, euler, parts, closed", [
+    ("cad_hole", 0, 1, True),        # a bore through a cube: one handle
+    ("cad_bracket", -4, 1, True),    # three bores: genus 3
+    ("torus", 0, 1, True),
+    ("array_cubes", 20, 10, True),   # ten separate cubes
+    ("grid_open", 1, 1, False),      # a disk
+    ("screw", 0, 1, False),          # a tube open at both ends
+])
+def test_the_shapes_are_what_they_stand_for(built, name, euler, parts, closed):
+    pos, cv, fs, tri = built[name]
+    chi, n_parts, boundary = euler_and_parts(cv, fs)
+    assert (chi, n_parts, boundary == 0) == (euler, parts, closed)
+    assert len(tri) == int((fs - 2).sum())
+
+
+def test_the_folded_shell_folds(built):
+    """The solidified head's inner shell turns back on itself in its concave places (adjacent
+    faces facing opposite ways), the kind of surface ABF does not converge on."""
+    pos, cv, fs, tri = built["thick_shell"]
+    starts = np.concatenate([[0], np.cumsum(fs)[:-1]])
+    normals = np.zeros((len(fs), 3))
+    for f, (s, n) in enumerate(zip(starts, fs)):
+        p = pos[cv[s:s + n]]
+        normals[f] = np.cross(p[1] - p[0], p[2] - p[0])
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    edge_faces = {}
+    for f, (s, n) in enumerate(zip(starts, fs)):
+        ring = cv[s:s + n]
+        for k in range(n):
+            a, b = int(ring[k]), int(ring[(k + 1) % n])
+            edge_faces.setdefault((min(a, b), max(a, b)), []).append(f)
+    folds = sum(1 for fl in edge_faces.values() if len(fl) == 2 and normals[fl[0]] @ normals[fl[1]] < -0.5)
+    assert folds > 0
+
+
+@pytest.mark.parametrize("method", ["abf", "slim", "lscm"])
+@pytest.mark.parametrize("name", shapes.SHAPES)
+def test_every_island_keeps_the_atlas_rule(built, name, method):
+    pos, cv, fs, tri = built[name]
+    r = uvflat.unwrap(pos, cv, fs, method=method, triangles=tri)
+    assert shapes.check(pos, cv, fs, tri, r) == []
+    # A fallback names the method it replaces.
+    for c in r.charts:
+        if c.status == "fallback":
+            assert method in c.reason and c.method != method, c.reason
+
+
+@pytest.mark.parametrize("name", ["cylinder_ngon", "cylinder_fan", "cad_hole", "cad_bracket", "long_cylinder"])
+def test_hard_surfaces_are_cut_along_their_creases(built, name):
+    """Flat or rolled everywhere but along their creases, with more curved corners than cones:
+    cut along the creases, every piece laid flat without distortion by the method itself, and
+    the same seams whatever the method."""
+    pos, cv, fs, tri = built[name]
+    seams = {}
+    for method in ("abf", "slim", "lscm"):
+        r = uvflat.unwrap(pos, cv, fs, method=method, triangles=tri)
+        assert r.phases["crease_cuts"] >= 1
+        assert shapes.check(pos, cv, fs, tri, r) == []
+        for c in r.charts:
+            assert (c.status, c.method) == ("solved", method), c.reason
+            assert c.conformal < 1.001 and c.area < 1.001, (c.conformal, c.area)
+        seams[method] = sorted(map(tuple, np.sort(np.asarray(r.new_seams), axis=1).tolist()))
+    assert seams["abf"] == seams["slim"] == seams["lscm"]
+
+
+@pytest.mark.parametrize("name", ["bevel_cube", "monkey", "uv_sphere", "torus", "thick_shell", "twisted_torus"])
+def test_rounded_and_organic_shapes_keep_the_cones_road(built, name):
+    """Curvature inside the regions (bevels, organic surfaces) or spread everywhere: not cut
+    along creases."""
+    pos, cv, fs, tri = built[name]
+    r = uvflat.unwrap(pos, cv, fs, method="abf", triangles=tri)
+    assert r.phases["crease_cuts"] == 0
+
+
+@pytest.mark.parametrize("name", ["cad_bracket", "text", "thick_shell"])
+def test_the_same_shape_unwraps_the_same_way_twice(built, name):
+    pos, cv, fs, tri = built[name]
+    a = uvflat.unwrap(pos, cv, fs, method="abf", triangles=tri)
+    b = uvflat.unwrap(pos, cv, fs, method="abf", triangles=tri)
+    assert np.array_equal(a.uv, b.uv)
+    assert np.array_equal(np.asarray(a.new_seams), np.asarray(b.new_seams))
+
+
+def flat_ring(n=12):
+    """A flat ring of `n` quads between radii 1 and 2, with its render triangles."""
+    ang = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    pos = np.concatenate([np.c_[np.cos(ang), np.sin(ang), np.zeros(n)],
+                          np.c_[2 * np.cos(ang), 2 * np.sin(ang), np.zeros(n)]])
+    quads = [[k, (k + 1) % n, n + (k + 1) % n, n + k] for k in range(n)]
+    cv = np.array([v for q in quads for v in q], dtype=np.int64)
+    fs = np.full(n, 4, dtype=np.int64)
+    tri = np.array([[4 * k, 4 * k + 1, 4 * k + 2] for k in range(n)] + [[4 * k, 4 * k + 2, 4 * k + 3] for k in range(n)])
+    return pos, cv, fs, tri
+
+
+@pytest.mark.parametrize("method", ["abf", "slim", "lscm", "arap", "mips"])
+def test_a_flat_face_with_a_hole_keeps_its_shape(method):
+    """The hole is joined to the outline by one cut; the map lays the ring as it is, the cut's
+    two sides on each other. That is a closed seam, not an outline crossing itself: the
+    method's own map is kept (no fallback), undistorted."""
+    pos, cv, fs, tri = flat_ring()
+    r = uvflat.unwrap(pos, cv, fs, method=method, triangles=tri)
+    assert shapes.check(pos, cv, fs, tri, r) == []
+    assert len(r.new_seams) == 1 and len(r.charts) == 1
+    c = r.charts[0]
+    assert (c.status, c.method, c.overlap) == ("solved", method, False), c.reason
+    assert c.conformal < 1.001 and c.area < 1.001
+
+
+def test_the_island_check_sees_a_ring_and_a_flip():
+    """The check itself fails where it must: a flat ring (not a disk) unwrapped without
+    automatic seams, and a map with one triangle turned over."""
+    pos, cv, fs, tri = flat_ring()
+    ring = uvflat.unwrap(pos, cv, fs, method="lscm", auto_seams=False, triangles=tri)
+    assert any("not a disk" in p for p in shapes.check(pos, cv, fs, tri, ring))
+    cut = uvflat.unwrap(pos, cv, fs, method="lscm", triangles=tri)
+    assert shapes.check(pos, cv, fs, tri, cut) == []
+    bent = cut.uv.copy()
+    bent[0] = bent[2] + 3.0 * (bent[2] - bent[0])  # corner 0 past corner 2: its triangle turns over
+    turned = types.SimpleNamespace(face_solved=cut.face_solved, charts=[], uv=bent, chart=cut.chart,
+                                   new_seams=cut.new_seams)
+    assert any(p.startswith("metrics:") for p in shapes.check(pos, cv, fs, tri, turned))
