@@ -118,6 +118,22 @@ def test_hard_surfaces_are_cut_along_their_creases(built, name):
     assert seams["abf"] == seams["slim"] == seams["lscm"]
 
 
+@pytest.mark.parametrize("method", ["abf", "slim", "lscm", "arap"])
+def test_flat_letters_with_holes_are_laid_as_they_are(built, method):
+    """Extruded text: every letter's faces are flat or rolled, its holes joined to its outline
+    by a cut whose sides the map lays on each other (a closed seam). Every island is the
+    method's own map, undistorted, with the same seams whatever the method."""
+    pos, cv, fs, tri = built["text"]
+    r = uvflat.unwrap(pos, cv, fs, method=method, triangles=tri)
+    assert shapes.check(pos, cv, fs, tri, r) == []
+    for c in r.charts:
+        assert (c.status, c.method) == ("solved", method), c.reason
+        assert c.conformal < 1.001, c.conformal
+    ref = uvflat.unwrap(pos, cv, fs, method="abf", triangles=tri)
+    pairs = lambda x: sorted(map(tuple, np.sort(np.asarray(x.new_seams), axis=1).tolist()))  # noqa: E731
+    assert pairs(r) == pairs(ref)
+
+
 @pytest.mark.parametrize("name", ["bevel_cube", "monkey", "uv_sphere", "torus", "thick_shell", "twisted_torus"])
 def test_rounded_and_organic_shapes_keep_the_cones_road(built, name):
     """Curvature inside the regions (bevels, organic surfaces) or spread everywhere: not cut

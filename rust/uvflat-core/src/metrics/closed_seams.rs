@@ -14,7 +14,8 @@
 //!   UV" within [`TWIN_TOLERANCE`] of the outline's extent, as an unfolding reaches the two
 //!   copies along different strips of triangles; and
 //! * the triangles around the two copies at each such point do not overlap (their interiors
-//!   are disjoint, by separating axes): the two sides of the seam lie on either side of it.
+//!   are disjoint to within the same tolerance, by separating axes): the two sides of the
+//!   seam lie on either side of it.
 //!
 //! Every other contact counts as in [`super::boundary_self_overlap`]: crossings, touches of
 //! different surface points, a seam's sides lying on each other only nearly (its copies
@@ -142,15 +143,16 @@ impl<'a> Twins<'a> {
         });
         let fan = |v: u32| &ids[start[v as usize] as usize..start[v as usize + 1] as usize];
         let corners = |k: u32| self.triangles[k as usize].map(|v| self.uv[v as usize]);
-        fan(a).iter().any(|&x| fan(b).iter().any(|&y| x != y && interiors_overlap(corners(x), corners(y))))
+        let tol = self.tolerance;
+        fan(a).iter().any(|&x| fan(b).iter().any(|&y| x != y && interiors_overlap(corners(x), corners(y), tol)))
     }
 }
 
-/// Whether the interiors of two UV triangles overlap: no edge direction of either separates
-/// them (touching along an edge or at a point is no overlap; a tolerance of 1e-12 of their
-/// size absorbs rounding where they touch).
-fn interiors_overlap(p: [[f64; 2]; 3], q: [[f64; 2]; 3]) -> bool {
-    let size = p.iter().chain(&q).fold(0.0f64, |m, c| m.max(c[0].abs()).max(c[1].abs())).max(f64::MIN_POSITIVE);
+/// Whether the interiors of two UV triangles overlap by more than `tol`: no edge direction of
+/// either separates them to within `tol` (touching along an edge or at a point is no overlap;
+/// the tolerance is the one copies of a vertex are matched with, so the two sides of a seam
+/// laid within rounding of each other do not overlap).
+fn interiors_overlap(p: [[f64; 2]; 3], q: [[f64; 2]; 3], tol: f64) -> bool {
     for tri in [p, q] {
         for k in 0..3 {
             let (a, b) = (tri[k], tri[(k + 1) % 3]);
@@ -165,7 +167,6 @@ fn interiors_overlap(p: [[f64; 2]; 3], q: [[f64; 2]; 3]) -> bool {
                     .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| (l.min(x), h.max(x)))
             };
             let ((lo_p, hi_p), (lo_q, hi_q)) = (span(&p), span(&q));
-            let tol = 1e-12 * size;
             if hi_p <= lo_q + tol || hi_q <= lo_p + tol {
                 return false;
             }
@@ -227,18 +228,20 @@ mod tests {
     fn copies_apart_or_different_points_touching_still_overlap() {
         let (pos, tris, loops) = slit_square();
         // The cut's right side moved over its left side: copies at different UVs whose
-        // triangles overlap along the seam, by more than the tolerance and by less.
-        for shift in [1e-6, 1e-9] {
+        // triangles overlap along the seam, beyond the tolerance (3e-9 here).
+        for shift in [1e-6, 1e-8] {
             let mut uv = uv_of(&pos);
             uv[16][0] -= shift;
             uv[17][0] -= shift;
             assert!(outline_overlap(&pos, &tris, &uv, &loops), "{shift}");
         }
         // Over each other by rounding only, within the tolerance: a closed seam.
-        let mut uv = uv_of(&pos);
-        uv[16][0] -= 1e-15;
-        uv[17][0] -= 1e-15;
-        assert!(!outline_overlap(&pos, &tris, &uv, &loops));
+        for shift in [1e-15, 1e-10] {
+            let mut uv = uv_of(&pos);
+            uv[16][0] -= shift;
+            uv[17][0] -= shift;
+            assert!(!outline_overlap(&pos, &tris, &uv, &loops), "{shift}");
+        }
         // The same layout with the copies told apart in 3D (two surface points that touch).
         let mut apart = pos.clone();
         apart[16][2] = 1e-3;
@@ -261,9 +264,13 @@ mod tests {
     #[test]
     fn separating_axes_tell_touching_from_overlapping_triangles() {
         let t = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
-        assert!(!interiors_overlap(t, [[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]])); // a shared edge
-        assert!(!interiors_overlap(t, [[0.0, 0.0], [-1.0, 0.0], [0.0, -1.0]])); // a shared point
-        assert!(interiors_overlap(t, [[0.2, 0.2], [2.0, 0.2], [0.2, 2.0]]));
-        assert!(interiors_overlap(t, t));
+        let tol = 1e-9;
+        assert!(!interiors_overlap(t, [[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]], tol)); // a shared edge
+        assert!(!interiors_overlap(t, [[0.0, 0.0], [-1.0, 0.0], [0.0, -1.0]], tol)); // a shared point
+        // Over the shared edge by less than the tolerance, and by more.
+        assert!(!interiors_overlap(t, [[1.0 - 1e-12, 0.0], [0.0, 1.0 - 1e-12], [1.0, 1.0]], tol));
+        assert!(interiors_overlap(t, [[1.0 - 1e-6, 0.0], [0.0, 1.0 - 1e-6], [1.0, 1.0]], tol));
+        assert!(interiors_overlap(t, [[0.2, 0.2], [2.0, 0.2], [0.2, 2.0]], tol));
+        assert!(interiors_overlap(t, t, tol));
     }
 }
