@@ -94,6 +94,12 @@ fn charts_the_cones_unfold_or_that_are_curved_keep_their_road() {
     let r = run(&s, abf(), |o| o.auto_seams.avoid_vertices = vec![0]);
     assert_eq!(r.phases.crease_cuts, 0);
     assert!(r.new_seams.iter().all(|e| e[0] != 0 && e[1] != 0));
+    // A pinned chart keeps its road, and its pin.
+    let pins = [(0u32, [0.25, 0.5])];
+    let input = uvflat_core::MeshInput { pins: &pins, ..s.input() };
+    let r = unwrap(&input, &UnwrapOptions { method: abf(), ..Default::default() }).expect("unwrap");
+    assert_eq!(r.phases.crease_cuts, 0);
+    assert_eq!(r.uv[0], [0.25, 0.5]);
     // Without automatic seams nothing is cut.
     let r = run(&s, abf(), |o| o.auto_seams.enabled = false);
     assert_eq!(r.phases.crease_cuts, 0);

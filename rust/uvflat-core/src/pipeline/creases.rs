@@ -32,8 +32,9 @@
 //! is held to the atlas rule and repaired as any other). The creases are new seams, reported
 //! with the first region.
 //!
-//! Preconditions: automatic seams on, a chart without a defect and without pins (the caller's
-//! triage). Deterministic: edges and regions in id order.
+//! Preconditions: automatic seams on, a chart without a defect and without pinned corners (the
+//! caller's check: a pinned chart keeps the road it had). Deterministic: edges and regions in
+//! id order.
 
 use super::{Context, Piece};
 use crate::charts::Chart;

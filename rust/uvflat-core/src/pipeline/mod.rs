@@ -148,9 +148,11 @@ pub(crate) fn run(ctx: &Context<'_, '_>, chart: Chart, base_seams: &[[u32; 2]], 
 }
 
 fn road(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], depth: usize) -> Vec<Piece> {
-    let road = triage::triage(chart, ctx.options.auto_seams.enabled, pinned(ctx, chart));
-    if road != Triage::Solve {
-        // A hard surface is cut along its creases first; its regions take the road anew.
+    let is_pinned = pinned(ctx, chart);
+    let road = triage::triage(chart, ctx.options.auto_seams.enabled, is_pinned);
+    if road != Triage::Solve && !is_pinned {
+        // A hard surface is cut along its creases first; its regions take the road anew (a
+        // pinned chart keeps its road: its pins are the user's layout).
         let t = std::time::Instant::now();
         let creases = creases::crease_seams(ctx, chart);
         ctx.clock.add(|p| p.plan(t, |p| &mut p.cut_state));
