@@ -221,10 +221,14 @@ pub fn solve(chart: &Chart, pins: &[(u32, [f64; 2])]) -> Result<ChartSolution, C
 }
 
 /// How much a map of `chart` folds: its flipped or degenerate triangles, and whether a
-/// boundary loop crosses itself or another. Ordered: fewer flips first, then no overlap.
+/// boundary loop crosses itself or another (a closed seam does not count,
+/// [`crate::metrics::closed_seams`], as in the chart's report). Ordered: fewer flips first,
+/// then no overlap.
 pub(crate) fn folds(chart: &Chart, uv: &[[f64; 2]]) -> (usize, bool) {
     let flipped = crate::metrics::count_flips(&chart.triangles, uv);
-    (flipped, crate::metrics::boundary_self_overlap(uv, &chart.boundary_loops))
+    let loops = &chart.boundary_loops;
+    let overlap = crate::metrics::closed_seams::outline_overlap(&chart.positions, &chart.triangles, uv, loops);
+    (flipped, overlap)
 }
 
 /// Whether solving `chart` again with its holes filled can give a map that folds less than
@@ -251,7 +255,10 @@ pub fn filling_may_help(chart: &Chart, uv: &[[f64; 2]], open: (usize, bool)) -> 
     match open {
         (0, false) => false,
         (0, true) => match chart.outer_loop() {
-            Some(l) => !crate::metrics::boundary_self_overlap(uv, std::slice::from_ref(&chart.boundary_loops[l])),
+            Some(l) => {
+                let outer = std::slice::from_ref(&chart.boundary_loops[l]);
+                !crate::metrics::closed_seams::outline_overlap(&chart.positions, &chart.triangles, uv, outer)
+            }
             None => true,
         },
         _ => true,

@@ -64,25 +64,8 @@ pub fn crease_seams(ctx: &Context<'_, '_>, chart: &Chart) -> Option<Vec<[u32; 2]
     if chart.triangles.len() >= CREASES_BELOW || chart.defect.is_some() || chart.faces.len() < 2 {
         return None;
     }
-    let graph = ChartGraph::new(ctx.mesh, chart);
-    let crease: Vec<bool> = (0..graph.edges.len())
-        .map(|e| graph.edge_polygons[e][1] != u32::MAX && graph.dihedral[e] >= CREASE_ANGLE)
-        .collect();
-    if !crease.iter().any(|&c| c) {
-        return None;
-    }
     let n = chart.positions.len();
-    let mut on_crease = vec![false; n];
-    for (e, &c) in crease.iter().enumerate() {
-        if c {
-            let [a, b] = graph.edges[e];
-            if ctx.avoid[chart.mesh_vertex[a as usize] as usize] || ctx.avoid[chart.mesh_vertex[b as usize] as usize] {
-                return None;
-            }
-            on_crease[a as usize] = true;
-            on_crease[b as usize] = true;
-        }
-    }
+    // The angle sums first: a chart with few curved vertices needs no edge graph.
     let boundary = chart.boundary_mask();
     let mut angle_sum = vec![0.0f64; n];
     for t in &chart.triangles {
@@ -99,6 +82,24 @@ pub fn crease_seams(ctx: &Context<'_, '_>, chart: &Chart) -> Option<Vec<[u32; 2]
     let curved = (0..n).filter(|&v| inner(v) && defect(v).abs() > CURVED_DEFECT).count();
     if curved <= ctx.options.auto_seams.max_cones {
         return None;
+    }
+    let graph = ChartGraph::new(ctx.mesh, chart);
+    let crease: Vec<bool> = (0..graph.edges.len())
+        .map(|e| graph.edge_polygons[e][1] != u32::MAX && graph.dihedral[e] >= CREASE_ANGLE)
+        .collect();
+    if !crease.iter().any(|&c| c) {
+        return None;
+    }
+    let mut on_crease = vec![false; n];
+    for (e, &c) in crease.iter().enumerate() {
+        if c {
+            let [a, b] = graph.edges[e];
+            if ctx.avoid[chart.mesh_vertex[a as usize] as usize] || ctx.avoid[chart.mesh_vertex[b as usize] as usize] {
+                return None;
+            }
+            on_crease[a as usize] = true;
+            on_crease[b as usize] = true;
+        }
     }
     let unrelieved: f64 = (0..n).filter(|&v| inner(v) && !on_crease[v]).map(|v| defect(v).abs()).sum();
     if !(unrelieved <= FLAT_TOLERANCE) {
