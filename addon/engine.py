@@ -77,6 +77,7 @@ class Summary:
     seams_marked: bool = False
     seams_only: bool = False  # Mark Seams Only: seams marked, no UVs written
     non_manifold_edges: int = 0  # edges of 3+ selected faces, treated as seams
+    inconsistent_edges: int = 0  # edges between faces with opposite normals, treated as seams
     flipped_faces: int = 0  # faces holding the flipped triangles (what Select Flipped selects)
     pack_shapes: tuple = ()  # island shapes Blender's packer was given (see pack_shape)
     pack_shape: str = ""     # the shape asked for
@@ -121,7 +122,7 @@ class Summary:
     @property
     def needs_attention(self) -> bool:
         """Whether the operator should report a warning rather than info."""
-        return bool(self.failed) or self.non_manifold_edges > 0
+        return bool(self.failed) or self.non_manifold_edges > 0 or self.inconsistent_edges > 0
 
     def line(self) -> str:
         """The short status line: counts, time, problems grouped by reason, and a pointer to
@@ -143,6 +144,10 @@ class Summary:
             n = self.non_manifold_edges
             text += (f"; {n} non-manifold edge{'s' * (n != 1)} (3+ faces) treated as "
                      f"seam{'s' * (n != 1)}")
+        if self.inconsistent_edges:
+            n = self.inconsistent_edges
+            text += (f"; {n} edge{'s' * (n != 1)} between faces with opposite normals treated as "
+                     f"seam{'s' * (n != 1)} (Mesh > Normals > Recalculate Outside joins them)")
         flips = self.flipped_triangles
         if flips:
             text += f"; {flips} flipped triangle{'s' * (flips != 1)}"
@@ -1106,6 +1111,7 @@ def _write_and_pack(context, run: Run) -> Summary:
         summary.results[job.obj.name] = job.result
         summary.faces += int((np.asarray(job.result.face_solved, dtype=bool) & job.selected).sum())
         summary.non_manifold_edges += int(getattr(job.result, "non_manifold_edges", 0))
+        summary.inconsistent_edges += int(getattr(job.result, "inconsistent_edges", 0))
         summary.flipped_faces += job.flipped_faces
         for chart in job.result.charts:
             summary.cones += getattr(chart, "cones", 0)

@@ -36,16 +36,17 @@ def _get(collection, attr, count, dtype, width=1):
     return out if width == 1 else out.reshape(count, width)
 
 
-def _attribute(mesh, names, count, dtype, width=1, field="value"):
+def _attribute(mesh, names, count, dtype, width=1, field="value", data_type=None):
     """Bulk copy of the first built-in attribute of ``names`` the mesh stores, else ``None``.
 
     Attribute arrays are copied with one memcpy; the equivalent RNA properties
     (``loops.vertex_index``, ``polygons.select`` …) go element by element inside Blender and
-    are one to two orders of magnitude slower on large meshes.
+    are one to two orders of magnitude slower on large meshes. With ``data_type``, an attribute
+    of another type is passed over (see :func:`_set_bool_attribute`).
     """
     for name in names:
         attr = mesh.attributes.get(name)
-        if attr is not None:
+        if attr is not None and (data_type is None or attr.data_type == data_type):
             return _get(attr.data, field, count, dtype, width)
     return None
 
@@ -53,7 +54,7 @@ def _attribute(mesh, names, count, dtype, width=1, field="value"):
 def _flags(mesh, names, count):
     """A boolean attribute of ``names`` as a ``(count,)`` mask; all False when Blender stores
     none (it creates the attribute the first time a flag is set)."""
-    flags = _attribute(mesh, names, count, bool)
+    flags = _attribute(mesh, names, count, bool, data_type="BOOLEAN")
     return np.zeros(count, dtype=bool) if flags is None else flags
 
 
@@ -392,6 +393,15 @@ def select_faces(mesh, faces):
 
 def _set_bool_attribute(mesh, name, domain, values):
     attr = mesh.attributes.get(name)
+    if attr is not None and (attr.data_type != "BOOLEAN"
+                             or (domain is not None and attr.domain != domain)):
+        # A mesh made by ``Mesh.from_pydata`` in Blender 5.0.1 lists ``.select_edge`` as an
+        # INT32_2D attribute over a boolean array: writing it, or ``edges.foreach_set("select")``,
+        # fails or crashes. Selection carries no data of the user's, so it is made anew.
+        if domain is None:
+            domain = attr.domain
+        mesh.attributes.remove(attr)
+        attr = None
     if attr is None:
         attr = mesh.attributes.new(name, "BOOLEAN", domain)
     if len(attr.data) != len(values):

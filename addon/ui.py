@@ -172,6 +172,9 @@ class UVFLAT_PT_result(bpy.types.Panel):
         if summary.non_manifold_edges:
             box.label(text=f"{summary.non_manifold_edges} non-manifold edges cut as seams",
                       icon="ERROR")
+        if summary.inconsistent_edges:
+            box.label(text=f"{summary.inconsistent_edges} edges between opposite normals cut "
+                           "as seams", icon="ERROR")
         rows = engine.chart_rows(summary)
         if summary.density == "FIXED":
             box.label(text=f"Texel density {summary.texel_density:g} px/m at "

@@ -639,6 +639,7 @@ def run_single(args, addon, method_props, pack_props) -> int:
             "file": str(source), "output": str(args.output), "method": args.method,
             "status": "charts failed" if status else "ok", "seconds": time.perf_counter() - started,
             "summary": summary.line(), "non_manifold_edges": summary.non_manifold_edges,
+            "inconsistent_edges": summary.inconsistent_edges,
             "repairs": repairs,
             "texture_size": summary.texture_size,
             "objects": {name: [dict(chart_report(c), texel_density=_json_number(

@@ -996,6 +996,57 @@ def test_non_manifold_edges_are_a_warning(ext, scene):
     assert ext.engine.LAST_SUMMARY.method == "lscm"
 
 
+def _pydata_grid_with_a_flipped_face(n=4):
+    """An ``n`` by ``n`` quad grid made by ``Mesh.from_pydata``, as scripts and importers make
+    meshes, with one inner face wound the other way (its normal points down)."""
+    verts = [(x, y, 0.0) for y in range(n + 1) for x in range(n + 1)]
+    faces = []
+    for y in range(n):
+        for x in range(n):
+            a = y * (n + 1) + x
+            faces.append((a, a + 1, a + n + 2, a + n + 1))
+    inner = (n // 2) * n + n // 2
+    faces[inner] = faces[inner][::-1]
+    mesh = bpy.data.meshes.new("PyData")
+    mesh.from_pydata(verts, [], faces)
+    mesh.update()
+    return common.link_mesh_object("PyData", mesh), inner
+
+
+def test_selection_of_a_mesh_made_by_from_pydata(ext, scene):
+    """Blender 5.0.1 lists ``.select_edge`` of a ``from_pydata`` mesh as an INT32_2D attribute
+    over a boolean array; selecting faces must still work (and leave a boolean attribute)."""
+    obj, _ = _pydata_grid_with_a_flipped_face()
+    mesh = obj.data
+    assert mesh.attributes[".select_edge"].data_type != "BOOLEAN", "Blender fixed the quirk"
+    mask = np.zeros(len(mesh.polygons), bool)
+    mask[:3] = True
+    ext.mesh_io.select_faces(mesh, mask)
+    assert mesh.attributes[".select_edge"].data_type == "BOOLEAN"
+    assert np.array_equal(ext.mesh_io.read_face_selection(mesh), mask)
+    edges = np.zeros(len(mesh.edges), bool)
+    mesh.edges.foreach_get("select", edges)
+    assert edges.sum() == 10  # the three quads of the first row: 4 + 3 + 3 edges
+
+
+def test_edges_between_opposite_normals_are_a_warning(ext, scene):
+    """A face whose normal points the other way is cut off along its four inner edges (the
+    faces run those edges the same way); the status line says so and how to join it."""
+    obj, inner = _pydata_grid_with_a_flipped_face()
+    result, summary = unwrap(ext, [obj], method="abf")
+    assert result == {"FINISHED"}
+    assert summary.inconsistent_edges == 4 and summary.non_manifold_edges == 0
+    assert summary.needs_attention
+    assert "4 edges between faces with opposite normals treated as seams" in summary.line()
+    assert "Recalculate Outside" in summary.line()
+    res = summary.results[obj.name]
+    chart = np.asarray(res.chart)
+    assert len(set(chart.tolist())) == 2 and np.sum(chart == chart[inner]) == 1
+    data = read(ext, obj)
+    assert np.asarray(res.face_solved).all()
+    assert flipped_triangles(data, chart) == 0
+
+
 # ---------------------------------------------------------------------------------------------
 # Modal unwrap on a worker thread (stand-ins for the window manager, window and events)
 

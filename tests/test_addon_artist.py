@@ -707,6 +707,34 @@ def _box_areas(uv, face_sizes, chart, angles=720):
     return out
 
 
+def test_bulk_box_angles_are_the_one_by_one_angles(ext):
+    """Islands are turned to their smallest boxes in bulk (a mesh of tens of thousands of
+    small islands took seconds one by one): the same angle as one hull at a time, for hulls
+    of every size, with repeated points, and for rectangles turned by a known angle."""
+    packing = ext.packing
+    rng = np.random.default_rng(7)
+    hulls, turned_by = [], []
+    for k in range(3000):
+        h = int(rng.choice([3, 4, 5, 8, 13, 31, 64, 65, 130]))
+        t = np.sort(rng.uniform(0, 2 * np.pi, h))
+        pts = np.stack([np.cos(t), rng.uniform(0.2, 1) * np.sin(t)], axis=1)
+        if k % 5 == 0:   # a 2 by 1 rectangle turned by a known angle
+            a = rng.uniform(-np.pi / 4 + 0.01, np.pi / 4 - 0.01)
+            r = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+            pts = np.array([[0, 0], [2, 0], [2, 1], [0, 1]], float) @ r.T
+            turned_by.append((k, a))
+        if k % 7 == 0:   # a repeated point: a zero-length edge, no candidate
+            pts = np.vstack([pts, pts[-1:]])
+        hulls.append(pts + rng.normal(size=2))
+    offsets = np.concatenate([[0], np.cumsum([len(h) for h in hulls])])
+    bulk = packing.min_box_angles(offsets, np.vstack(hulls))
+    one = np.array([packing.min_box_angle(h) for h in hulls])
+    np.testing.assert_allclose(bulk, one, rtol=0, atol=1e-12)
+    for k, a in turned_by:
+        assert bulk[k] == pytest.approx(-a, abs=1e-9)
+    assert np.count_nonzero(bulk) > len(hulls) // 2
+
+
 def test_orient_turns_islands_to_their_smallest_box(ext, scene):
     obj = suzanne()
     boxes = {}

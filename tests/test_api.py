@@ -1129,6 +1129,25 @@ def test_non_manifold_edges_are_counted():
     assert uvflat.unwrap(pos, cv, fs).non_manifold_edges == 0
 
 
+def test_edges_between_opposite_normals_are_counted():
+    # A Möbius strip (one-sided): the closing quad runs edge 0-1 the way the first one does.
+    n = 40
+    t = 2 * np.pi * np.arange(n) / n
+    s = np.array([-0.3, 0.3])
+    r = 1 + s[None, :] * np.cos(t / 2)[:, None]
+    pos = np.stack([r * np.cos(t)[:, None], r * np.sin(t)[:, None],
+                    s[None, :] * np.sin(t / 2)[:, None]], axis=-1).reshape(-1, 3)
+    i = np.arange(n - 1)
+    cv = np.concatenate([np.stack([2 * i, 2 * i + 1, 2 * i + 3, 2 * i + 2], 1).ravel(),
+                         [2 * n - 2, 2 * n - 1, 0, 1]])
+    res = uvflat.unwrap(pos, cv, np.full(n, 4), method="abf")
+    assert res.inconsistent_edges == 1 and res.as_dict()["inconsistent_edges"] == 1
+    assert [c.kind for c in res.charts] == ["disk"] and res.charts[0].flips == 0
+    # Wound consistently (the closing quad turned), it is an open cylinder: nothing counted.
+    cv[-4:] = [2 * n - 2, 2 * n - 1, 1, 0]
+    assert uvflat.unwrap(pos, cv, np.full(n, 4), method="abf").inconsistent_edges == 0
+
+
 def test_metrics_per_face_distortion():
     # Stretch a planar grid by 2 along x in UV: every face has sigma1/sigma2 = 2 and, after
     # area normalisation, sigma1*sigma2 = 1.

@@ -14,6 +14,9 @@ fn main() {
     if let Ok(k) = std::env::var("MAX_CONES") {
         o.auto_seams.max_cones = k.parse().unwrap();
     }
+    if let Ok(v) = std::env::var("SAME_SEAMS") {
+        o.auto_seams.same_seams = v == "1";
+    }
     let r = unwrap(&s.input(), &o).unwrap();
     let secs = t.elapsed().as_secs_f64();
     let mut codes = std::collections::BTreeMap::new();

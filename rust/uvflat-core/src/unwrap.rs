@@ -89,6 +89,10 @@ pub struct Unwrapped {
     /// Edges of the selection used by three or more selected faces; each was treated as a
     /// seam (a mesh with many of them is shredded into many small charts).
     pub non_manifold_edges: usize,
+    /// Edges of two selected faces whose normals point to opposite sides (the faces traverse
+    /// the edge in the same direction); each was treated as a seam. Recalculating the normals
+    /// in Blender joins them again, except on a one-sided surface.
+    pub inconsistent_edges: usize,
     /// `[conformal, area]` distortion of every face that received UVs, as
     /// [`crate::metrics::MeshMetrics::per_face`] defines it (3D-area-weighted over the face's
     /// triangles, the chart's UVs area-normalised); NaN elsewhere. Measured on the returned
@@ -128,7 +132,7 @@ pub fn unwrap(input: &MeshInput<'_>, options: &UnwrapOptions) -> Result<Unwrappe
     faer::set_global_parallelism(faer::Par::Seq);
 
     let render = if input.triangles.is_empty() { None } else { Some(FaceTriangulation::new(&mesh, input.triangles)?) };
-    let (charts, non_manifold_edges) = build_charts_counting(&mesh, input.seams, input.selected, render.as_ref());
+    let (charts, cut_edges) = build_charts_counting(&mesh, input.seams, input.selected, render.as_ref());
     // Pinned corners only (a later pin of the same corner wins): nothing per corner when
     // there are no pins.
     let pin_of_corner: HashMap<u32, [f64; 2]> = input.pins.iter().copied().collect();
@@ -215,7 +219,8 @@ pub fn unwrap(input: &MeshInput<'_>, options: &UnwrapOptions) -> Result<Unwrappe
     }
     new_seams.sort_unstable();
     new_seams.dedup();
-    Ok(Unwrapped { uv, face_chart, charts: reports, new_seams, non_manifold_edges, face_distortion, face_flips, phases: ctx.clock.get() })
+    Ok(Unwrapped { uv, face_chart, charts: reports, new_seams, non_manifold_edges: cut_edges.non_manifold,
+        inconsistent_edges: cut_edges.inconsistent, face_distortion, face_flips, phases: ctx.clock.get() })
 }
 
 

@@ -452,6 +452,7 @@ fn unwrap(
         method: method_name,
         new_seams: new_seams.unbind(),
         non_manifold_edges: result.non_manifold_edges,
+        inconsistent_edges: result.inconsistent_edges,
         face_conformal: PyArray1::from_iter(py, result.face_distortion.iter().map(|d| d[0])).unbind(),
         face_area: PyArray1::from_iter(py, result.face_distortion.iter().map(|d| d[1])).unbind(),
         face_flips: PyArray1::from_vec(py, result.face_flips).unbind(),

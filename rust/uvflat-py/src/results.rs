@@ -172,6 +172,7 @@ pub struct PyUnwrapResult {
     pub method: String,
     pub new_seams: Py<PyArray2<u32>>,
     pub non_manifold_edges: usize,
+    pub inconsistent_edges: usize,
     pub face_conformal: Py<PyArray1<f64>>,
     pub face_area: Py<PyArray1<f64>>,
     pub face_flips: Py<PyArray1<u32>>,
@@ -274,6 +275,14 @@ impl PyUnwrapResult {
         self.non_manifold_edges
     }
 
+    /// Edges of two selected faces whose normals point to opposite sides (both faces run the
+    /// edge in the same direction); each was treated as a seam. Recalculating the normals joins
+    /// them again, except on a one-sided surface such as a Möbius strip.
+    #[getter]
+    fn inconsistent_edges(&self) -> usize {
+        self.inconsistent_edges
+    }
+
     /// Conformal distortion (σ1/σ2, 1 is perfect) of every face that received UVs, shape (F,),
     /// float64, NaN elsewhere: the same per-face measure as ``uvflat.metrics(...).face_conformal``,
     /// on the returned UVs and the triangulation the unwrap used.
@@ -313,6 +322,7 @@ impl PyUnwrapResult {
         d.set_item("seconds", self.seconds)?;
         d.set_item("new_seams", self.new_seams.bind(py))?;
         d.set_item("non_manifold_edges", self.non_manifold_edges)?;
+        d.set_item("inconsistent_edges", self.inconsistent_edges)?;
         Ok(d)
     }
 

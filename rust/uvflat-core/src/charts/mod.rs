@@ -411,14 +411,25 @@ pub fn build_charts_with(
     build_charts_counting(mesh, seams, selected, render).0
 }
 
-/// [`build_charts_with`], also returning how many non-manifold edges (used by three or more
-/// selected faces) were treated as seams.
+/// Edges of the selection that [`build_charts_counting`] cut although they are not seams.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct CutEdges {
+    /// Edges used by three or more selected faces.
+    pub non_manifold: usize,
+    /// Edges of two selected faces that traverse them in the same direction: the faces'
+    /// normals point to opposite sides (one face is flipped, or the surface is one-sided
+    /// like a Möbius strip).
+    pub inconsistent: usize,
+}
+
+/// [`build_charts_with`], also returning how many edges that are not seams were cut
+/// ([`CutEdges`]).
 pub fn build_charts_counting(
     mesh: &PolyMesh<'_>,
     seams: &[[u32; 2]],
     selected: Option<&[bool]>,
     render: Option<&FaceTriangulation>,
-) -> (Vec<Chart>, usize) {
+) -> (Vec<Chart>, CutEdges) {
     let n_faces = mesh.n_faces();
     let n_corners = mesh.n_corners();
     let is_sel = |f: usize| selected.is_none_or(|s| s[f]);
@@ -447,7 +458,7 @@ pub fn build_charts_counting(
     // joined[c]: the polygon edge starting at corner c continues into another face of the chart.
     let mut joined = vec![false; n_corners];
     let mut face_uf = UnionFind::new(n_faces);
-    let mut non_manifold = 0usize;
+    let mut cut = CutEdges::default();
     let mut corner_uf = UnionFind::new(n_corners);
     let mut i = 0;
     while i < recs.len() {
@@ -456,7 +467,7 @@ pub fn build_charts_counting(
             j += 1;
         }
         if j - i > 2 {
-            non_manifold += 1;
+            cut.non_manifold += 1;
         }
         if j - i == 2 && !seam_set.contains(&recs[i].0) {
             let c1 = recs[i].1 as usize;
@@ -471,6 +482,8 @@ pub fn build_charts_counting(
                 joined[c2] = true;
                 corner_uf.union(c1 as u32, c2n as u32);
                 corner_uf.union(c1n as u32, c2 as u32);
+            } else if f1 != f2 {
+                cut.inconsistent += 1;
             }
         }
         i = j;
@@ -494,7 +507,7 @@ pub fn build_charts_counting(
 
     use rayon::prelude::*;
     let charts = chart_faces.into_par_iter().map(|faces| make_chart(mesh, faces, &corner_root, &joined, render)).collect();
-    (charts, non_manifold)
+    (charts, cut)
 }
 
 fn make_chart(

@@ -79,8 +79,9 @@ def unwrap(positions, corner_verts, face_sizes, *, method="abf", seams=None, sel
     """Unwrap the selected faces of a polygon mesh into per-corner UVs.
 
     The selection is split into charts along seams, non-manifold edges (counted in
-    ``UnwrapResult.non_manifold_edges``) and the selection border; every chart is mapped by
-    ``method`` (charts in parallel, without the GIL). With ``auto_seams`` (the default) every
+    ``UnwrapResult.non_manifold_edges``), edges between faces whose normals point to
+    opposite sides (``UnwrapResult.inconsistent_edges``) and the selection border; every
+    chart is mapped by ``method`` (charts in parallel, without the GIL). With ``auto_seams`` (the default) every
     chart is held to one rule: each island is a disk, has no flipped triangle, its outline does
     not cross itself, and at most 5% of its area has a texel density outside
     [1/max_stretch, max_stretch] of the island's own. Closed charts, charts with handles and
@@ -163,7 +164,7 @@ def unwrap(positions, corner_verts, face_sizes, *, method="abf", seams=None, sel
     Returns:
         UnwrapResult: per-corner ``uv``, per-face ``chart`` and ``face_solved``, one
         ``ChartReport`` per chart (with ``cones`` and ``cut_length``), ``seconds``,
-        ``new_seams`` and ``non_manifold_edges``.
+        ``new_seams``, ``non_manifold_edges`` and ``inconsistent_edges``.
 
     Raises:
         InputError: wrong shape, dtype or length; a non-finite ``fit_to`` UV.

@@ -191,6 +191,11 @@ class UnwrapResult:
         """Edges of the selection used by three or more selected faces; each was treated as a
         seam (many of them shred a mesh into many small charts)."""
     @property
+    def inconsistent_edges(self) -> int:
+        """Edges of two selected faces whose normals point to opposite sides (both faces run
+        the edge in the same direction); each was treated as a seam. Recalculating the normals
+        joins them again, except on a one-sided surface such as a Möbius strip."""
+    @property
     def face_conformal(self) -> npt.NDArray[np.float64]:
         """Conformal distortion of every face that received UVs, shape (F,), NaN elsewhere
         (the per-face measure of :func:`metrics`, on the returned UVs)."""
