@@ -77,6 +77,7 @@ class Summary:
     seams_marked: bool = False
     seams_only: bool = False  # Mark Seams Only: seams marked, no UVs written
     non_manifold_edges: int = 0  # edges of 3+ selected faces, treated as seams
+    stretched: tuple = ()  # objects with a non-uniform scale, unwrapped as they look
     inconsistent_edges: int = 0  # edges between faces with opposite normals, treated as seams
     flipped_faces: int = 0  # faces holding the flipped triangles (what Select Flipped selects)
     pack_shapes: tuple = ()  # island shapes Blender's packer was given (see pack_shape)
@@ -148,6 +149,10 @@ class Summary:
             n = self.inconsistent_edges
             text += (f"; {n} edge{'s' * (n != 1)} between faces with opposite normals treated as "
                      f"seam{'s' * (n != 1)} (Mesh > Normals > Recalculate Outside joins them)")
+        if self.stretched:
+            names = ", ".join(self.stretched[:2]) + (", ..." if len(self.stretched) > 2 else "")
+            text += (f"; unwrapped as scaled ({names}: non-uniform object scale; the UVs stay "
+                     f"right when it is applied)")
         flips = self.flipped_triangles
         if flips:
             text += f"; {flips} flipped triangle{'s' * (flips != 1)}"
@@ -239,6 +244,15 @@ class _Job:
     quality: dict | None = None      # distortion attributes as they were before writing
     aspect: float = 1.0              # width / height of the texture (correct aspect)
     flipped_faces: int = 0           # faces holding flipped triangles (uvflat_flipped)
+    # the object's stretch (see object_stretch) when it is not a uniform scale, else None;
+    # the core then solves the surface as the viewport shows it
+    stretch: np.ndarray | None = None
+
+    @property
+    def shape_positions(self) -> np.ndarray:
+        """Vertex positions of the surface to unwrap: the mesh's own, stretched as the
+        object's transform stretches them (``positions`` when it does not)."""
+        return self.positions if self.stretch is None else self.positions @ self.stretch.T
 
 
 # ---------------------------------------------------------------------------------------------
@@ -272,6 +286,24 @@ def _enter_edit_mode(view_layer, objects, active):
 # The work
 
 
+def object_stretch(obj, tolerance=1e-5):
+    """The symmetric positive definite ``(3, 3)`` stretch ``P`` of ``obj``'s world transform
+    ``M = R P`` (polar decomposition: ``P = sqrt(Mᵀ M)``, ``R`` a rotation or reflection),
+    in the object's own axes, or ``None`` when ``P`` is a uniform scale within ``tolerance``
+    (rotation, mirroring and uniform scale change no angle or length ratio of the surface,
+    so the unwrap would be the same). A non-uniform scale (the object scaled along one axis
+    and not applied) stretches every face in the viewport: the unwrap is solved on the
+    stretched surface, so the texture is not stretched on it."""
+    m = np.array(obj.matrix_world, dtype=np.float64)[:3, :3]
+    w, v = np.linalg.eigh(m.T @ m)
+    if not np.all(np.isfinite(w)) or w.min() <= 0.0:
+        return None   # a degenerate transform (a zero scale) has no surface to unwrap
+    s = np.sqrt(w)
+    if s.max() - s.min() <= tolerance * s.max():
+        return None
+    return (v * s) @ v.T
+
+
 def _read(obj) -> _Job:
     mesh = obj.data
     positions, corner_verts, face_sizes = mesh_io.read_topology(mesh)
@@ -286,6 +318,7 @@ def _read(obj) -> _Job:
         old_uv = np.zeros((len(corner_verts), 2), dtype=np.float32)
         pins = np.zeros(0, dtype=np.int64)
     job = _Job(obj, positions, corner_verts, face_sizes, selected, uv_name, old_uv, pins)
+    job.stretch = object_stretch(obj)
     job.raw_selected = raw_selected
     job.seams = mesh_io.read_seams(mesh)
     # read here, on the main thread: the solve may run on a worker thread
@@ -364,7 +397,7 @@ def _solve(core, job: _Job, method, options, use_fit, progress=None):
             kwargs["fit_to"] = job.old_uv.astype(np.float64)
             job.fitted = True
     job.result = core.unwrap(
-        job.positions,
+        job.shape_positions,
         job.corner_verts.astype(np.int64),
         job.face_sizes.astype(np.int64),
         method=method,
@@ -1111,6 +1144,8 @@ def _write_and_pack(context, run: Run) -> Summary:
         summary.results[job.obj.name] = job.result
         summary.faces += int((np.asarray(job.result.face_solved, dtype=bool) & job.selected).sum())
         summary.non_manifold_edges += int(getattr(job.result, "non_manifold_edges", 0))
+        if job.stretch is not None:
+            summary.stretched += (job.obj.name,)
         summary.inconsistent_edges += int(getattr(job.result, "inconsistent_edges", 0))
         summary.flipped_faces += job.flipped_faces
         for chart in job.result.charts:

@@ -748,3 +748,55 @@ def test_orient_turns_islands_to_their_smallest_box(ext, scene):
     assert all(as_is <= least * 1.002 for as_is, least in boxes[True]), boxes[True]
     # not oriented: some island does not (so the check above can fail)
     assert any(as_is > least * 1.05 for as_is, least in boxes[False]), boxes[False]
+
+
+def _world_metrics(ext, obj):
+    """``uvflat.metrics`` of ``obj``'s active UV map on its surface as the viewport shows it
+    (the object's world transform applied)."""
+    import uvflat
+
+    data = read(ext, obj)
+    m = np.array(obj.matrix_world)[:3, :3]
+    return uvflat.metrics(data.positions @ m.T, data.corner_verts, data.face_sizes, data.uv,
+                          triangles=ext.mesh_io.read_loop_triangles(obj.data))
+
+
+def _cylinder(name, scale=(1, 1, 1), rotation=(0, 0, 0)):
+    """A 24-sided cylinder with the object transform given (not applied to the mesh)."""
+    bpy.ops.mesh.primitive_cylinder_add(vertices=24)
+    obj = bpy.context.object
+    obj.name = name
+    obj.scale, obj.rotation_euler = scale, rotation
+    bpy.context.view_layer.update()
+    return obj
+
+
+def test_a_non_uniformly_scaled_object_is_unwrapped_as_it_looks(ext, scene):
+    """An object scaled along one axis and not applied: the viewport shows the stretched
+    surface, and that is the surface unwrapped (the texture is not stretched on it), said on
+    the status line. A rotated, mirrored, uniformly scaled copy unwraps exactly as the mesh."""
+    tall = _cylinder("Tall", scale=(1, 1, 5), rotation=(0.3, 0.2, 0.1))
+    result, summary = unwrap(ext, [tall], method="abf")
+    assert result == {"FINISHED"}
+    assert summary.stretched == ("Tall",) and "unwrapped as scaled (Tall" in summary.line()
+    assert _world_metrics(ext, tall).conformal < 1.01
+    # the object's stretch is its scale, in its own axes, whatever the rotation
+    # (the world matrix is stored in single precision)
+    np.testing.assert_allclose(ext.engine.object_stretch(tall), np.diag([1.0, 1.0, 5.0]),
+                               atol=1e-6)
+    # the same mesh unwrapped without the scale is stretched 5 to 1 on the tall surface
+    plain = _cylinder("Plain")
+    unwrap(ext, [plain], method="abf")
+    tall_data, plain_data = read(ext, tall), read(ext, plain)
+    np.testing.assert_array_equal(tall_data.corner_verts, plain_data.corner_verts)
+    import uvflat
+
+    stretched = uvflat.metrics(plain_data.positions * [1, 1, 5], plain_data.corner_verts,
+                               plain_data.face_sizes, plain_data.uv)
+    assert stretched.conformal > 2.0
+    # rotation, mirroring and uniform scale change nothing
+    turned = _cylinder("Turned", scale=(-2, 2, 2), rotation=(1.0, 0.5, -0.7))
+    _, summary = unwrap(ext, [turned], method="abf")
+    assert ext.engine.object_stretch(turned) is None
+    assert summary.stretched == () and "scaled" not in summary.line()
+    np.testing.assert_array_equal(read(ext, turned).uv, plain_data.uv)

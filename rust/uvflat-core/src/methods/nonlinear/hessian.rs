@@ -5,7 +5,8 @@
 //!
 //! * [`symmetric_dirichlet_derivatives`] with the analytic projection [`project_twist`]
 //!   (Smith, Goes & Kim 2019: only the twist eigenvalue can be negative);
-//! * [`mips_derivatives`] with the numerical projection [`project_psd4`] (cyclic Jacobi).
+//! * [`mips_derivatives`] with the numerical projections [`project_psd4`] and [`project_abs4`]
+//!   (cyclic Jacobi).
 //!
 //! Preconditions: `det J > 0` (a valid map of a barrier method). Failures: none; a
 //! non-finite matrix projects to zero in [`project_psd4`].
@@ -98,6 +99,19 @@ pub fn mips_derivatives(j: [f64; 4]) -> ([f64; 4], [[f64; 4]; 4]) {
 /// Project a symmetric 4×4 matrix onto the positive semidefinite cone (cyclic Jacobi
 /// eigen-decomposition, negative eigenvalues set to zero).
 pub fn project_psd4(a: &[[f64; 4]; 4]) -> [[f64; 4]; 4] {
+    filter_eigenvalues4(a, |x| x.max(0.0))
+}
+
+/// A symmetric 4×4 matrix with its negative eigenvalues mirrored (replaced by their absolute
+/// values): positive semidefinite, and along a direction of negative curvature as steep as the
+/// energy bends. Chen et al. 2024 ("Trust-region eigenvalue filtering for projected Newton")
+/// find it converges in fewer iterations than clamping to zero.
+pub fn project_abs4(a: &[[f64; 4]; 4]) -> [[f64; 4]; 4] {
+    filter_eigenvalues4(a, f64::abs)
+}
+
+/// `V f(Λ) Vᵀ` for the eigen-decomposition `V Λ Vᵀ` of a symmetric 4×4 matrix (cyclic Jacobi).
+fn filter_eigenvalues4(a: &[[f64; 4]; 4], f: impl Fn(f64) -> f64) -> [[f64; 4]; 4] {
     let mut m = *a;
     let mut v = [[0.0; 4]; 4];
     for i in 0..4 {
@@ -140,7 +154,7 @@ pub fn project_psd4(a: &[[f64; 4]; 4]) -> [[f64; 4]; 4] {
             }
         }
     }
-    let lam: [f64; 4] = [m[0][0].max(0.0), m[1][1].max(0.0), m[2][2].max(0.0), m[3][3].max(0.0)];
+    let lam: [f64; 4] = [f(m[0][0]), f(m[1][1]), f(m[2][2]), f(m[3][3])];
     let mut out = [[0.0; 4]; 4];
     for a in 0..4 {
         for b in 0..4 {
@@ -243,6 +257,16 @@ mod tests {
         for i in 0..4 {
             for j in 0..4 {
                 assert!((p[i][j] - want[i][j]).abs() < 1e-12, "{p:?}");
+            }
+        }
+        // Mirrored: diag(1, 2, 3, 4) rotated the same way; a PSD matrix is kept.
+        let p = project_abs4(&mk(d));
+        let want = mk([1.0, 2.0, 3.0, 4.0]);
+        let kept = project_abs4(&a);
+        for i in 0..4 {
+            for j in 0..4 {
+                assert!((p[i][j] - want[i][j]).abs() < 1e-12, "{p:?}");
+                assert!((kept[i][j] - a[i][j]).abs() < 1e-12);
             }
         }
     }
