@@ -100,11 +100,12 @@ def test_every_island_keeps_the_atlas_rule(built, name, method):
             assert method in c.reason and c.method != method, c.reason
 
 
-@pytest.mark.parametrize("name", ["cylinder_ngon", "cylinder_fan", "cad_hole", "cad_bracket", "long_cylinder"])
+@pytest.mark.parametrize("name", ["cylinder_ngon", "cylinder_fan", "cad_hole", "cad_bracket", "long_cylinder",
+                                  "cone"])
 def test_hard_surfaces_are_cut_along_their_creases(built, name):
-    """Flat or rolled everywhere but along their creases, with more curved corners than cones:
-    cut along the creases, every piece laid flat without distortion by the method itself, and
-    the same seams whatever the method."""
+    """Flat or rolled everywhere but along their creases (and at a cone's tip, cut to the rim),
+    with more curved corners than cones: cut along the creases, every piece laid flat without
+    distortion by the method itself, and the same seams whatever the method."""
     pos, cv, fs, tri = built[name]
     seams = {}
     for method in ("abf", "slim", "lscm"):

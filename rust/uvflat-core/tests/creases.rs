@@ -122,3 +122,55 @@ fn a_bent_cylinder_is_not_developable_and_keeps_the_cones_road() {
         assert!(c.flips == 0 && !c.overlap && c.density.outside <= 0.05 + 1e-9, "{c:?}");
     }
 }
+
+/// A closed cone of radius 1 and height `h`: a fan of `n` triangles around the tip and an
+/// `n`-gon base, wound outwards.
+fn capped_cone(n: usize, h: f64) -> Soup {
+    let mut positions = vec![[0.0, 0.0, h]];
+    for i in 0..n {
+        let a = std::f64::consts::TAU * i as f64 / n as f64;
+        positions.push([a.cos(), a.sin(), 0.0]);
+    }
+    let ring = |i: usize| (1 + i % n) as u32;
+    let mut corner_verts = Vec::new();
+    for i in 0..n {
+        corner_verts.extend([0, ring(i), ring(i + 1)]);
+    }
+    corner_verts.extend((0..n).rev().map(ring));
+    let mut face_sizes = vec![3; n];
+    face_sizes.push(n as u32);
+    Soup { positions, corner_verts, face_sizes }
+}
+
+/// A cone's tip is curved where no crease touches it: the regions' own cones relieve it. The
+/// base comes off along its rim, the side is cut from the tip to the rim and unrolls into a
+/// sector: two islands without distortion, the same seams under every method.
+#[test]
+fn a_capped_cone_is_its_base_and_an_unrolled_side() {
+    let n = 32;
+    let s = capped_cone(n, 2.0);
+    let rim: BTreeSet<[u32; 2]> = (0..n).map(|i| {
+        let (a, b) = ((1 + i) as u32, (1 + (i + 1) % n) as u32);
+        [a.min(b), a.max(b)]
+    }).collect();
+    let mut seams_of = Vec::new();
+    for method in ["abf", "slim", "lscm", "mips"].map(|m| Method::parse(m, &[]).unwrap()) {
+        let name = method.name();
+        let r = run(&s, method, |_| {});
+        assert_eq!(r.phases.crease_cuts, 1, "{name}");
+        assert_eq!(r.charts.len(), 2, "{name}");
+        for c in &r.charts {
+            assert_eq!(c.status, ChartStatus::Solved, "{name}: {:?}", c.reason);
+            assert_eq!(c.method, name);
+            let d = c.distortion;
+            assert!(d.conformal < 1.0 + 1e-6 && d.area < 1.0 + 1e-6, "{name}: {d:?}");
+        }
+        let seams: BTreeSet<[u32; 2]> = r.new_seams.iter().copied().collect();
+        assert!(rim.is_subset(&seams), "{name}: the rim is cut");
+        let inside: Vec<_> = seams.difference(&rim).collect();
+        assert_eq!(inside.len(), 1, "{name}: one cut from the tip to the rim: {inside:?}");
+        assert_eq!(inside[0][0], 0, "{name}: the cut starts at the tip");
+        seams_of.push(seams);
+    }
+    assert!(seams_of.windows(2).all(|w| w[0] == w[1]), "the same seams whatever the method");
+}

@@ -24,8 +24,11 @@
 //!   more regions;
 //! * more of its inner vertices are curved (an angle defect above [`CURVED_DEFECT`]) than
 //!   [`crate::cuts::AutoSeamOptions::max_cones`]: with fewer, its cones unfold it already;
-//! * the regions are developable: the angle defects of the inner vertices no crease touches
-//!   add up, in absolute value, to at most [`FLAT_TOLERANCE`].
+//! * the regions are developable but for a few apexes: the angle defects of the inner
+//!   vertices no crease touches add up, in absolute value, to at most [`FLAT_TOLERANCE`] once
+//!   up to Max Cones apexes (defect above [`APEX_DEFECT`], a cone's tip) are left out; the
+//!   apexes are cut to their region's outline by the shortest path, so a cone's side is cut
+//!   from its tip to its rim and unrolls into a sector.
 //!
 //! The regions then take the pipeline's road at the same split depth (a region that is a
 //! disk is solved as it is, a rolled side or a face with holes is cut first, and every piece
@@ -57,6 +60,11 @@ pub const CURVED_DEFECT: f64 = 1e-3;
 /// touches, for the regions to count as developable (about 1°: rounding in single-precision
 /// coordinates leaves far less; a sphere holds 4π).
 pub const FLAT_TOLERANCE: f64 = 0.02;
+
+/// Smallest angle defect, in radians, of an apex: a vertex no crease touches whose curvature
+/// is a cone's tip (a cone twice as high as wide: 3.5; a quarter of a cube's corner: 0.39),
+/// not curvature spread over a patch.
+pub const APEX_DEFECT: f64 = 0.5;
 
 /// The creases of `chart` as mesh vertex pairs (sorted) when it is a hard surface cut along
 /// them (see the module docs), else `None`.
@@ -101,8 +109,14 @@ pub fn crease_seams(ctx: &Context<'_, '_>, chart: &Chart) -> Option<Vec<[u32; 2]
             on_crease[b as usize] = true;
         }
     }
-    let unrelieved: f64 = (0..n).filter(|&v| inner(v) && !on_crease[v]).map(|v| defect(v).abs()).sum();
-    if !(unrelieved <= FLAT_TOLERANCE) {
+    // Inner vertices no crease touches, most curved first (ties by id): up to Max Cones of them
+    // may be apexes (a cone's tip); the rest must be flat.
+    let mut unrelieved: Vec<(f64, u32)> =
+        (0..n).filter(|&v| inner(v) && !on_crease[v]).map(|v| (defect(v).abs(), v as u32)).collect();
+    unrelieved.sort_unstable_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+    let apexes = unrelieved.iter().take(ctx.options.auto_seams.max_cones).filter(|x| x.0 > APEX_DEFECT).count();
+    let rest: f64 = unrelieved[apexes..].iter().map(|x| x.0).sum();
+    if !(rest <= FLAT_TOLERANCE) {
         return None;
     }
     let mut regions = crate::charts::UnionFind::new(graph.polygons.len());
@@ -115,8 +129,34 @@ pub fn crease_seams(ctx: &Context<'_, '_>, chart: &Chart) -> Option<Vec<[u32; 2]
     if count < 2 {
         return None;
     }
+    // Each apex is cut to its region's outline by the shortest path (3D length, avoided vertices
+    // left out), so the region unrolls: a cone's side becomes a sector.
+    let mut cut = crease.clone();
+    if apexes > 0 {
+        let cost: Vec<f64> = (0..graph.edges.len())
+            .map(|e| {
+                let [a, b] = graph.edges[e];
+                let avoided = |v: u32| ctx.avoid[chart.mesh_vertex[v as usize] as usize];
+                if avoided(a) || avoided(b) { f64::INFINITY } else { graph.length[e] }
+            })
+            .collect();
+        let outline = |v: u32| on_crease[v as usize] || !inner(v as usize);
+        let sources: Vec<(u32, u32)> = (0..n as u32).filter(|&v| outline(v)).map(|v| (v, 0)).collect();
+        let (dist, parent, _) = crate::cuts::graph::multi_source_dijkstra(&graph, &cost, &sources);
+        for &(_, apex) in &unrelieved[..apexes] {
+            if !dist[apex as usize].is_finite() {
+                return None;
+            }
+            let mut v = apex;
+            while dist[v as usize] > 0.0 {
+                let e = parent[v as usize];
+                cut[e as usize] = true;
+                v = crate::cuts::graph::other(&graph, e, v);
+            }
+        }
+    }
     let mut seams: Vec<[u32; 2]> = (0..graph.edges.len())
-        .filter(|&e| crease[e])
+        .filter(|&e| cut[e])
         .map(|e| {
             let [a, b] = graph.edges[e];
             let (ma, mb) = (chart.mesh_vertex[a as usize], chart.mesh_vertex[b as usize]);
