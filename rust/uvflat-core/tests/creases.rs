@@ -173,4 +173,10 @@ fn a_capped_cone_is_its_base_and_an_unrolled_side() {
         seams_of.push(seams);
     }
     assert!(seams_of.windows(2).all(|w| w[0] == w[1]), "the same seams whatever the method");
+
+    // With the tip avoided no cut may end there: the cone keeps the cones' road, and no new
+    // seam touches the tip.
+    let r = run(&s, abf(), |o| o.auto_seams.avoid_vertices = vec![0]);
+    assert_eq!(r.phases.crease_cuts, 0);
+    assert!(r.new_seams.iter().all(|e| e[0] != 0 && e[1] != 0), "{:?}", r.new_seams);
 }

@@ -148,7 +148,7 @@ pub fn crease_seams(ctx: &Context<'_, '_>, chart: &Chart) -> Option<Vec<[u32; 2]
                 return None;
             }
             let mut v = apex;
-            while dist[v as usize] > 0.0 {
+            while !outline(v) {
                 let e = parent[v as usize];
                 cut[e as usize] = true;
                 v = crate::cuts::graph::other(&graph, e, v);
