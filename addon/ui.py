@@ -175,6 +175,9 @@ class UVFLAT_PT_result(bpy.types.Panel):
         if summary.inconsistent_edges:
             box.label(text=f"{summary.inconsistent_edges} edges between opposite normals cut "
                            "as seams", icon="ERROR")
+        if summary.stretched:
+            box.label(text="Unwrapped as scaled (non-uniform scale): "
+                           + ", ".join(summary.stretched), icon="INFO")
         rows = engine.chart_rows(summary)
         if summary.density == "FIXED":
             box.label(text=f"Texel density {summary.texel_density:g} px/m at "

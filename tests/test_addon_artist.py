@@ -780,6 +780,12 @@ def test_a_non_uniformly_scaled_object_is_unwrapped_as_it_looks(ext, scene):
     assert result == {"FINISHED"}
     assert summary.stretched == ("Tall",) and "unwrapped as scaled (Tall" in summary.line()
     assert _world_metrics(ext, tall).conformal < 1.01
+    # the sidebar says it too (its layout recorded by a stand-in: no window headless)
+    from test_addon import _PanelLayout
+
+    layout = _PanelLayout()
+    ext.ui.UVFLAT_PT_result.draw(SimpleNamespace(layout=layout), bpy.context)
+    assert any(t.startswith("Unwrapped as scaled") and "Tall" in t for t in layout.labels)
     # the object's stretch is its scale, in its own axes, whatever the rotation
     # (the world matrix is stored in single precision)
     np.testing.assert_allclose(ext.engine.object_stretch(tall), np.diag([1.0, 1.0, 5.0]),
