@@ -49,29 +49,38 @@ fn rims(n: usize, rings: usize) -> BTreeSet<[u32; 2]> {
 fn a_capped_cylinder_is_two_caps_and_an_unrolled_side_under_every_method() {
     let (n, rings) = (32, 3);
     let s = capped_cylinder(n, rings, 2.0);
-    let mut seams_of = Vec::new();
-    for method in ["abf", "slim", "lscm", "mips"].map(|m| Method::parse(m, &[]).unwrap()) {
-        let name = method.name();
-        let r = run(&s, method, |_| {});
-        assert_eq!(r.phases.crease_cuts, 1, "{name}");
-        assert_eq!(r.charts.len(), 3, "{name}: {:?}", r.charts.iter().map(|c| c.triangles).collect::<Vec<_>>());
-        for c in &r.charts {
-            assert_eq!(c.status, ChartStatus::Solved, "{name}: {:?}", c.reason);
-            assert_eq!(c.method, name);
-            // Laid flat as they are: caps and the side unrolled without distortion.
-            let d = c.distortion;
-            assert!(d.conformal < 1.0 + 1e-6 && d.area < 1.0 + 1e-6, "{name}: {d:?}");
-        }
-        let seams: BTreeSet<[u32; 2]> = r.new_seams.iter().copied().collect();
+    let rim = rims(n, rings);
+    laid_flat_by_every_method(&s, 3, |name, seams| {
         // Both rims, and one line of `rings` edges down the side.
-        let rim = rims(n, rings);
-        assert!(rim.is_subset(&seams), "{name}");
+        assert!(rim.is_subset(seams), "{name}");
         let side: Vec<_> = seams.difference(&rim).collect();
         assert_eq!(side.len(), rings, "{name}: {side:?}");
         for e in side {
             let (a, b) = (e[0] as usize, e[1] as usize);
             assert_eq!(a % n, b % n, "{name}: a side seam runs along the height: {e:?}");
         }
+    });
+}
+
+/// `s` under `abf`, `slim`, `lscm` and `mips`: cut along its creases once, into `islands`
+/// islands, each solved by the method itself and laid flat without distortion; `check` sees
+/// every method's new seams, which are the same for every method.
+fn laid_flat_by_every_method(s: &Soup, islands: usize, check: impl Fn(&str, &BTreeSet<[u32; 2]>)) {
+    let mut seams_of = Vec::new();
+    for method in ["abf", "slim", "lscm", "mips"].map(|m| Method::parse(m, &[]).unwrap()) {
+        let name = method.name();
+        let r = run(s, method, |_| {});
+        assert_eq!(r.phases.crease_cuts, 1, "{name}");
+        assert_eq!(r.charts.len(), islands, "{name}: {:?}", r.charts.iter().map(|c| c.triangles).collect::<Vec<_>>());
+        for c in &r.charts {
+            assert_eq!(c.status, ChartStatus::Solved, "{name}: {:?}", c.reason);
+            assert_eq!(c.method, name);
+            // Laid flat as they are: caps, sides and sectors without distortion.
+            let d = c.distortion;
+            assert!(d.conformal < 1.0 + 1e-6 && d.area < 1.0 + 1e-6, "{name}: {d:?}");
+        }
+        let seams: BTreeSet<[u32; 2]> = r.new_seams.iter().copied().collect();
+        check(name, &seams);
         seams_of.push(seams);
     }
     assert!(seams_of.windows(2).all(|w| w[0] == w[1]), "the same seams whatever the method");
@@ -153,26 +162,12 @@ fn a_capped_cone_is_its_base_and_an_unrolled_side() {
         let (a, b) = ((1 + i) as u32, (1 + (i + 1) % n) as u32);
         [a.min(b), a.max(b)]
     }).collect();
-    let mut seams_of = Vec::new();
-    for method in ["abf", "slim", "lscm", "mips"].map(|m| Method::parse(m, &[]).unwrap()) {
-        let name = method.name();
-        let r = run(&s, method, |_| {});
-        assert_eq!(r.phases.crease_cuts, 1, "{name}");
-        assert_eq!(r.charts.len(), 2, "{name}");
-        for c in &r.charts {
-            assert_eq!(c.status, ChartStatus::Solved, "{name}: {:?}", c.reason);
-            assert_eq!(c.method, name);
-            let d = c.distortion;
-            assert!(d.conformal < 1.0 + 1e-6 && d.area < 1.0 + 1e-6, "{name}: {d:?}");
-        }
-        let seams: BTreeSet<[u32; 2]> = r.new_seams.iter().copied().collect();
-        assert!(rim.is_subset(&seams), "{name}: the rim is cut");
+    laid_flat_by_every_method(&s, 2, |name, seams| {
+        assert!(rim.is_subset(seams), "{name}: the rim is cut");
         let inside: Vec<_> = seams.difference(&rim).collect();
         assert_eq!(inside.len(), 1, "{name}: one cut from the tip to the rim: {inside:?}");
         assert_eq!(inside[0][0], 0, "{name}: the cut starts at the tip");
-        seams_of.push(seams);
-    }
-    assert!(seams_of.windows(2).all(|w| w[0] == w[1]), "the same seams whatever the method");
+    });
 
     // With the tip avoided no cut may end there: the cone keeps the cones' road, and no new
     // seam touches the tip.
