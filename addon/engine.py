@@ -743,12 +743,15 @@ def _orient(core, plan: _PackPlan):
     corners = np.repeat(plan.faces, job.face_sizes)
     pixels = plan.uv.copy()
     pixels[corners, 0] *= job.aspect
-    offsets, points = core.island_hulls(pixels, job.face_sizes.astype(np.int64),
-                                        np.maximum(plan.island, 0), selected=plan.faces)
-    if not np.all(np.diff(offsets) >= 3):
+    angles = core.island_box_angles(pixels, job.face_sizes.astype(np.int64), plan.island)
+    if not len(angles):
         return
-    packing.rotate_islands(pixels, job.face_sizes, plan.island,
-                           packing.min_box_angles(offsets, points))
+    # an island the core leaves as it lies (angle 0: no area, or its box already the least) is
+    # not touched at all, so its UVs stay exactly as they were
+    turned = (plan.island >= 0) & (angles[np.maximum(plan.island, 0)] != 0.0)
+    if not turned.any():
+        return
+    packing.rotate_islands(pixels, job.face_sizes, np.where(turned, plan.island, -1), angles)
     plan.uv[corners, 0] = pixels[corners, 0] / job.aspect
     plan.uv[corners, 1] = pixels[corners, 1]
 

@@ -9,10 +9,11 @@
   existing map (UV area per surface area of the faces left alone, :func:`density`), and the
   packer is told not to scale: the islands left alone keep theirs, and a re-unwrapped part
   matches them (:func:`scale_islands`).
-* **Orientation**: :func:`min_box_angles` turns an island to the smallest bounding box of its
-  convex hull, by the smallest rotation that does it. Used where the packer may not rotate
-  (a non-square texture the islands were not corrected for: Blender's packer rotates in the
-  texture's pixels, which would shear such islands) and by the *Orient* option.
+* **Orientation**: :func:`rotate_islands` turns every island by its angle, the one that turns
+  it to the smallest bounding box of its convex hull (``uvflat.island_box_angles``, computed
+  in the core: ``rust/uvflat-core/src/geometry/min_box.rs``). Used where the packer may not
+  rotate (a non-square texture the islands were not corrected for: Blender's packer rotates
+  in the texture's pixels, which would shear such islands) and by the *Orient* option.
 """
 
 from __future__ import annotations
@@ -127,7 +128,7 @@ def _about_centres(uv, face_sizes, island, n_islands):
     corner_island = np.repeat(island, face_sizes)
     corners = np.flatnonzero(corner_island >= 0)
     ci = corner_island[corners]
-    centre = 0.5 * (low + high)[ci]
+    centre = 0.5 * (low[ci] + high[ci])   # islands without corners (inf - inf) left out
     return corners, ci, centre, uv[corners].astype(np.float64) - centre
 
 
@@ -140,100 +141,3 @@ def rotate_islands(uv, face_sizes, island, angles):
     uv[corners, 0] = centre[:, 0] + c * d[:, 0] - s * d[:, 1]
     uv[corners, 1] = centre[:, 1] + s * d[:, 0] + c * d[:, 1]
     return uv
-
-
-def min_box_angle(hull, chunk=512):
-    """The rotation (radians) turning the convex polygon ``hull`` ((H,2), H >= 3) to its
-    bounding box of least area, the smallest in size of the four that do (a quarter turn
-    more or less gives the same box on its side)."""
-    hull = np.asarray(hull, dtype=np.float64)
-    edges = np.roll(hull, -1, axis=0) - hull
-    keep = np.hypot(edges[:, 0], edges[:, 1]) > 0
-    if not keep.any():
-        return 0.0
-    # the box of least area has a side along an edge of the hull: turning that edge to the
-    # u axis is a rotation by minus its direction
-    candidates = -np.arctan2(edges[keep, 1], edges[keep, 0])
-    candidates = np.append(candidates, 0.0)
-    centred = hull - hull.mean(axis=0)
-    best_area, best = np.inf, 0.0
-    for k in range(0, len(candidates), chunk):
-        angle = candidates[k:k + chunk]
-        c, s = np.cos(angle), np.sin(angle)
-        x = np.outer(c, centred[:, 0]) - np.outer(s, centred[:, 1])
-        y = np.outer(s, centred[:, 0]) + np.outer(c, centred[:, 1])
-        area = np.ptp(x, axis=1) * np.ptp(y, axis=1)
-        j = int(np.argmin(area))
-        if area[j] < best_area * (1.0 - 1e-9):
-            best_area, best = float(area[j]), float(angle[j])
-    # the same box is reached by any quarter turn more: take the smallest rotation
-    best = (best + np.pi / 4) % (np.pi / 2) - np.pi / 4
-    # keep the island as it was when turning it saves (almost) nothing
-    c0 = np.ptp(centred[:, 0]) * np.ptp(centred[:, 1])
-    return 0.0 if c0 <= best_area * (1.0 + 1e-6) else best
-
-
-# Hulls of at most this many points are turned in bulk (:func:`min_box_angles`); larger ones,
-# rare, one by one.
-_BULK_HULL = 64
-# Candidate boxes measured per bulk block (islands x candidates x points), bounding memory.
-_BULK_BLOCK = 1 << 21
-
-
-def min_box_angles(offsets, points):
-    """:func:`min_box_angle` of every hull ``points[offsets[k]:offsets[k + 1]]``.
-
-    Hulls of up to ``_BULK_HULL`` points, grouped by size, are measured in blocks of whole
-    arrays (a mesh of many small islands has tens of thousands of them), with the same
-    candidates in the same order as :func:`min_box_angle`, so the same box wins."""
-    offsets = np.asarray(offsets, dtype=np.int64)
-    points = np.asarray(points, dtype=np.float64)
-    sizes = np.diff(offsets)
-    angles = np.zeros(len(sizes), dtype=np.float64)
-    for k in np.flatnonzero(sizes > _BULK_HULL):
-        angles[k] = min_box_angle(points[offsets[k]:offsets[k + 1]])
-    small = np.flatnonzero(sizes <= _BULK_HULL)
-    if not len(small):
-        return angles
-    # sizes rounded up to a power of two: few groups, little padding
-    width = np.maximum(4, 1 << np.ceil(np.log2(np.maximum(sizes[small], 1))).astype(np.int64))
-    for w in np.unique(width):
-        group = small[width == w]
-        step = max(1, _BULK_BLOCK // (w * (w + 1)))
-        for b in range(0, len(group), step):
-            block = group[b:b + step]
-            angles[block] = _min_box_angles_padded(points, offsets[block], sizes[block], int(w))
-    return angles
-
-
-def _min_box_angles_padded(points, starts, sizes, width):
-    """:func:`min_box_angle` of hulls ``points[starts[k]:starts[k] + sizes[k]]``, each of at
-    most ``width`` points, measured together (a hull is padded with its last point, which
-    changes no extent)."""
-    j = np.arange(width)
-    n = sizes[:, None]
-    index = starts[:, None] + np.minimum(j, n - 1)
-    nxt = starts[:, None] + np.where(j + 1 < n, j + 1, 0)
-    hull = points[index]                                  # (B, W, 2)
-    edges = points[nxt] - hull
-    valid = (j < n) & (np.hypot(edges[..., 0], edges[..., 1]) > 0)
-    # candidates: every edge turned to the u axis, then no turn at all (last)
-    cand = np.concatenate([-np.arctan2(edges[..., 1], edges[..., 0]),
-                           np.zeros((len(sizes), 1))], axis=1)
-    ok = np.concatenate([valid, np.ones((len(sizes), 1), dtype=bool)], axis=1)
-    real = (j < n)[..., None]
-    centre = np.where(real, hull, 0.0).sum(axis=1) / sizes[:, None]
-    centred = hull - centre[:, None, :]                   # padding repeats a real point
-    c, s = np.cos(cand)[..., None], np.sin(cand)[..., None]
-    px, py = centred[:, None, :, 0], centred[:, None, :, 1]
-    x = c * px - s * py                                   # (B, W + 1, W)
-    y = s * px + c * py
-    area = np.ptp(x, axis=2) * np.ptp(y, axis=2)
-    area = np.where(ok, area, np.inf)
-    pick = np.argmin(area, axis=1)
-    rows = np.arange(len(sizes))
-    best_area, best = area[rows, pick], cand[rows, pick]
-    best = (best + np.pi / 4) % (np.pi / 2) - np.pi / 4
-    c0 = np.ptp(centred[..., 0], axis=1) * np.ptp(centred[..., 1], axis=1)
-    turned = np.any(valid, axis=1) & ~(c0 <= best_area * (1.0 + 1e-6))
-    return np.where(turned, best, 0.0)

@@ -707,32 +707,94 @@ def _box_areas(uv, face_sizes, chart, angles=720):
     return out
 
 
-def test_bulk_box_angles_are_the_one_by_one_angles(ext):
-    """Islands are turned to their smallest boxes in bulk (a mesh of tens of thousands of
-    small islands took seconds one by one): the same angle as one hull at a time, for hulls
-    of every size, with repeated points, and for rectangles turned by a known angle."""
-    packing = ext.packing
+def _least_box_areas(hulls, samples=4000):
+    """Least area of the bounding box of every point set in ``hulls`` over ``samples`` angles
+    of a quarter turn (the box repeats every quarter turn), by brute force."""
+    theta = np.linspace(0.0, np.pi / 2, samples, endpoint=False)
+    turn_u = np.stack([np.cos(theta), -np.sin(theta)])   # (2, S): u of every turned point
+    turn_v = np.stack([np.sin(theta), np.cos(theta)])
+    least = np.empty(len(hulls))
+    by_size = {}
+    for k, h in enumerate(hulls):
+        by_size.setdefault(len(h), []).append(k)
+    for size, members in by_size.items():
+        step = max(1, (1 << 22) // (size * samples))
+        for b in range(0, len(members), step):
+            block = members[b:b + step]
+            p = np.stack([hulls[k] for k in block])         # (B, H, 2)
+            p = p - p.mean(axis=1, keepdims=True)
+            area = np.ptp(p @ turn_u, axis=1) * np.ptp(p @ turn_v, axis=1)   # (B, S)
+            least[block] = area.min(axis=1)
+    return least
+
+
+def _box_area(points, angle):
+    """Area of the axis-aligned bounding box of ``points`` turned by ``angle``."""
+    c, s = np.cos(angle), np.sin(angle)
+    x = c * points[:, 0] - s * points[:, 1]
+    y = s * points[:, 0] + c * points[:, 1]
+    return np.ptp(x) * np.ptp(y)
+
+
+def test_island_box_angles_turn_islands_to_their_least_box():
+    """The core turns every island to the least-area box of its hull (the add-on's Orient and
+    non-square textures): no box of 4,000 sampled angles is smaller, for hulls of every size,
+    islands of several faces, repeated points; rectangles turned by a known angle come back,
+    and an island with no area or a non-finite UV is left as it lies."""
+    import uvflat
+
     rng = np.random.default_rng(7)
-    hulls, turned_by = [], []
+    islands, turned_by = [], []
     for k in range(3000):
         h = int(rng.choice([3, 4, 5, 8, 13, 31, 64, 65, 130]))
         t = np.sort(rng.uniform(0, 2 * np.pi, h))
         pts = np.stack([np.cos(t), rng.uniform(0.2, 1) * np.sin(t)], axis=1)
         if k % 5 == 0:   # a 2 by 1 rectangle turned by a known angle
-            a = rng.uniform(-np.pi / 4 + 0.01, np.pi / 4 - 0.01)
+            a = rng.uniform(0.01, np.pi / 4 - 0.01) * rng.choice([-1.0, 1.0])
             r = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
             pts = np.array([[0, 0], [2, 0], [2, 1], [0, 1]], float) @ r.T
             turned_by.append((k, a))
-        if k % 7 == 0:   # a repeated point: a zero-length edge, no candidate
+        if k % 7 == 0:   # a repeated point
             pts = np.vstack([pts, pts[-1:]])
-        hulls.append(pts + rng.normal(size=2))
-    offsets = np.concatenate([[0], np.cumsum([len(h) for h in hulls])])
-    bulk = packing.min_box_angles(offsets, np.vstack(hulls))
-    one = np.array([packing.min_box_angle(h) for h in hulls])
-    np.testing.assert_allclose(bulk, one, rtol=0, atol=1e-12)
+        islands.append(pts * rng.uniform(0.01, 10) + rng.normal(size=2))
+    # every third island of six or more points is two faces, sharing two corners
+    faces, face_island = [], []
+    for k, pts in enumerate(islands):
+        if k % 3 == 0 and len(pts) >= 6:
+            m = len(pts) // 2
+            faces += [pts[:m + 1], np.vstack([pts[m:], pts[:1]])]
+            face_island += [k, k]
+        else:
+            faces.append(pts)
+            face_island.append(k)
+    face_sizes = np.array([len(f) for f in faces])
+    uv = np.vstack(faces)
+    angles = uvflat.island_box_angles(uv, face_sizes, np.array(face_island))
+    offsets, _ = uvflat.island_hulls(uv, face_sizes, np.array(face_island))
+    assert angles.dtype == np.float64 and angles.shape == (len(offsets) - 1,) == (len(islands),)
+    assert np.all((angles >= -np.pi / 4) & (angles < np.pi / 4))
+    least = _least_box_areas(islands)
+    area = np.array([_box_area(p, a) for p, a in zip(islands, angles)])
+    as_is = np.array([_box_area(p, 0.0) for p in islands])
+    assert np.all(area <= least * (1 + 1e-6) * (1 + 1e-12)), np.max(area / least)
+    assert np.all(area <= as_is * (1 + 1e-12))
     for k, a in turned_by:
-        assert bulk[k] == pytest.approx(-a, abs=1e-9)
-    assert np.count_nonzero(bulk) > len(hulls) // 2
+        assert angles[k] == pytest.approx(-a, abs=1e-9)
+    assert np.count_nonzero(angles) > len(islands) // 2
+
+    # no area (collinear), a non-finite UV, an island number no face has, an island whose
+    # triangle is not selected (only a point of it is)
+    bad = np.array([[0, 0], [1, 1], [2, 2],
+                    [0, 0], [1, 0], [np.nan, 1],
+                    [0, 0], [1, 0.2], [0.3, 1],
+                    [0, 0], [0, 0], [0, 0]])
+    face_island = [0, 1, 3, 3]
+    angles = uvflat.island_box_angles(bad, [3, 3, 3, 3], face_island,
+                                      selected=[True, True, False, True])
+    assert angles.tolist() == [0.0, 0.0, 0.0, 0.0]
+    # the triangle selected is turned (so the zeros above can fail)
+    angles = uvflat.island_box_angles(bad, [3, 3, 3, 3], face_island)
+    assert angles[3] != 0.0 and angles[:3].tolist() == [0.0, 0.0, 0.0]
 
 
 def test_orient_turns_islands_to_their_smallest_box(ext, scene):

@@ -1407,6 +1407,46 @@ def test_island_hulls_report_islands_without_area_and_bad_input():
         uvflat.island_hulls(uv, face_sizes, np.array([0.0, 1.0, 2.0]))
 
 
+def test_island_box_angles_number_islands_like_hulls_and_name_bad_input():
+    # island 0: a 2 by 1 rectangle turned by 0.3, and a face far out (deselected below);
+    # island 1: collinear; island 2: a non-finite UV
+    c, s = np.cos(0.3), np.sin(0.3)
+    rect = np.array([[0, 0], [2, 0], [2, 1], [0, 1]], float) @ np.array([[c, s], [-s, c]])
+    uv = np.vstack([rect, [[5, 0], [6, 0], [5, 3]],
+                    [[0, 0], [1, 1], [2, 2]], [[0, 0], [1, 0], [np.nan, 1]]])
+    face_sizes = np.array([4, 3, 3, 3])
+    face_island = np.array([0, 0, 1, 2])
+    selected = np.array([True, False, True, True])
+    angles = uvflat.island_box_angles(uv, face_sizes, face_island, selected=selected)
+    offsets, _ = uvflat.island_hulls(uv, face_sizes, face_island, selected=selected)
+    assert angles.dtype == np.float64 and angles.shape == (len(offsets) - 1,) == (3,)
+    assert angles[0] == pytest.approx(-0.3, abs=1e-12)
+    assert angles[1:].tolist() == [0.0, 0.0]
+    # the face far out belongs to island 0 unless deselected: another hull, another angle
+    assert abs(uvflat.island_box_angles(uv, face_sizes, face_island)[0] + 0.3) > 1e-3
+    assert uvflat.island_box_angles(uv.astype(np.float32), face_sizes, face_island,
+                                    selected=selected)[0] == pytest.approx(-0.3, abs=1e-6)
+
+    bad = [
+        ((uv[:12], face_sizes, face_island), {}, "uv"),
+        ((uv, face_sizes, face_island[:3]), {}, "face_island"),
+        ((uv, face_sizes, face_island.astype(float)), {}, "face_island"),
+        ((uv, np.array([4, 3, -3, 3]), face_island), {}, "face_sizes"),
+        ((uv, face_sizes, face_island), {"selected": selected[:3]}, "selected"),
+        ((uv[:, :1], face_sizes, face_island), {}, "uv"),
+    ]
+    for args, kwargs, argument in bad:
+        with pytest.raises(uvflat.InputError) as err:
+            uvflat.island_box_angles(*args, **kwargs)
+        assert err.value.argument == argument, (argument, str(err.value))
+        # the same arguments are checked the same way for island_hulls
+        with pytest.raises(uvflat.InputError) as hull_err:
+            uvflat.island_hulls(*args, **kwargs)
+        assert str(hull_err.value) == str(err.value)
+    with pytest.raises(uvflat.InputError, match="face 3"):
+        uvflat.island_box_angles(uv, face_sizes, np.array([0, 0, 1, 4]))
+
+
 @pytest.mark.parametrize("falsy", [np.False_, 0, "", 0.0])
 def test_any_false_progress_value_cancels(falsy):
     pos, cv, fs = _disks(5)

@@ -523,18 +523,21 @@ fn metrics(
     Ok(PyMetrics::from(m))
 }
 
-/// Convex hull of every island of a per-corner UV map (for island packing).
-///
-/// See the package documentation (`uvflat.island_hulls`) for the arguments.
-#[pyfunction]
-#[pyo3(signature = (uv, face_sizes, face_island, *, selected = None))]
-fn island_hulls<'py>(
-    py: Python<'py>,
-    uv: &Bound<'py, PyAny>,
-    face_sizes: &Bound<'py, PyAny>,
-    face_island: &Bound<'py, PyAny>,
-    selected: Option<&Bound<'py, PyAny>>,
-) -> PyResult<(Bound<'py, PyArray1<i64>>, Bound<'py, PyArray2<f64>>)> {
+/// The arguments of `island_hulls` and `island_box_angles`, converted and checked: the UVs,
+/// the face sizes and every face's island (`-1` for a face left out by `selected`).
+struct Islands {
+    uv: Vec<[f64; 2]>,
+    face_sizes: Vec<u32>,
+    face_island: Vec<i64>,
+}
+
+fn read_islands(
+    py: Python<'_>,
+    uv: &Bound<'_, PyAny>,
+    face_sizes: &Bound<'_, PyAny>,
+    face_island: &Bound<'_, PyAny>,
+    selected: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Islands> {
     let uv = convert::float_rows::<2>(uv, "uv", "C")?;
     let (face_sizes, _) = indices(face_sizes, "face_sizes", Layout::Vector("F"), |face, size| {
         errors::input_error(py, "face_sizes", format!("face_sizes[{face}]: {size} is not a corner count"))
@@ -554,11 +557,47 @@ fn island_hulls<'py>(
         None => island,
         Some(sel) => island.iter().zip(sel).map(|(&k, &s)| if s { k } else { -1 }).collect(),
     };
+    Ok(Islands { uv, face_sizes, face_island })
+}
+
+/// Convex hull of every island of a per-corner UV map (for island packing).
+///
+/// See the package documentation (`uvflat.island_hulls`) for the arguments.
+#[pyfunction]
+#[pyo3(signature = (uv, face_sizes, face_island, *, selected = None))]
+fn island_hulls<'py>(
+    py: Python<'py>,
+    uv: &Bound<'py, PyAny>,
+    face_sizes: &Bound<'py, PyAny>,
+    face_island: &Bound<'py, PyAny>,
+    selected: Option<&Bound<'py, PyAny>>,
+) -> PyResult<(Bound<'py, PyArray1<i64>>, Bound<'py, PyArray2<f64>>)> {
+    let Islands { uv, face_sizes, face_island } = read_islands(py, uv, face_sizes, face_island, selected)?;
     let hulls = run_core(py, "uv", || uvflat_core::geometry::convex_hull::island_hulls(&uv, &face_sizes, &face_island))?;
     let offsets = PyArray1::from_iter(py, hulls.offsets.iter().map(|&o| o as i64));
     let n = hulls.points.len();
     let points = PyArray1::from_vec(py, hulls.points.into_flattened()).reshape([n, 2])?;
     Ok((offsets, points))
+}
+
+/// The turn of every island of a per-corner UV map to the least-area box of its hull.
+///
+/// See the package documentation (`uvflat.island_box_angles`) for the arguments.
+#[pyfunction]
+#[pyo3(signature = (uv, face_sizes, face_island, *, selected = None))]
+fn island_box_angles<'py>(
+    py: Python<'py>,
+    uv: &Bound<'py, PyAny>,
+    face_sizes: &Bound<'py, PyAny>,
+    face_island: &Bound<'py, PyAny>,
+    selected: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let Islands { uv, face_sizes, face_island } = read_islands(py, uv, face_sizes, face_island, selected)?;
+    let angles = run_core(py, "uv", || {
+        let hulls = uvflat_core::geometry::convex_hull::island_hulls(&uv, &face_sizes, &face_island)?;
+        Ok(uvflat_core::geometry::min_box::island_box_angles(&hulls))
+    })?;
+    Ok(PyArray1::from_vec(py, angles))
 }
 
 /// Raise the error a panic in the core turns into (lets the test-suite check that a panic
@@ -576,6 +615,7 @@ fn _uvflat(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(metrics, m)?)?;
     m.add_function(wrap_pyfunction!(factorization_seconds, m)?)?;
     m.add_function(wrap_pyfunction!(island_hulls, m)?)?;
+    m.add_function(wrap_pyfunction!(island_box_angles, m)?)?;
     m.add_function(wrap_pyfunction!(_internal_panic_check, m)?)?;
     m.add_class::<PyUnwrapResult>()?;
     m.add_class::<PyChartReport>()?;

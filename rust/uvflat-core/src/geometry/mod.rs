@@ -1,7 +1,9 @@
-//! What needs positions: corner angles (robust, clamped), areas, local 2D frames; and
-//! [`convex_hull`], planar hulls of point sets and of UV islands.
+//! What needs positions: corner angles (robust, clamped), areas, local 2D frames;
+//! [`convex_hull`], planar hulls of point sets and of UV islands; and [`min_box`], the turn of
+//! a hull (of every island's) to its bounding box of least area.
 
 pub mod convex_hull;
+pub mod min_box;
 
 /// Smallest corner angle (radians) a triangle is given when its 3D angles are used as
 /// targets. Degenerate (zero-area) triangles would otherwise have zero angles, infinite

@@ -38,6 +38,7 @@ from ._uvflat import (
     VertexIndexError,
     __version__,
     factorization_seconds,
+    island_box_angles,
     island_hulls,
     metrics,
 )
@@ -65,6 +66,7 @@ __all__ = [
     "VertexIndexError",
     "__version__",
     "factorization_seconds",
+    "island_box_angles",
     "island_hulls",
     "metrics",
     "plan_seams",

@@ -440,6 +440,38 @@ def island_hulls(
             message names the face).
     """
 
+def island_box_angles(
+    uv: _Floats,
+    face_sizes: _Ints,
+    face_island: _Ints,
+    *,
+    selected: _Bools | None = None,
+) -> npt.NDArray[np.float64]:
+    """The turn of every island of a per-corner UV map to its bounding box of least area.
+
+    Islands are numbered as in :func:`island_hulls`, and each is measured by its convex hull:
+    the least-area box of a convex polygon has a side along one of its edges, and rotating
+    calipers find it in one walk round the hull (Freeman & Shapira 1975; Toussaint 1983).
+    Islands run in parallel.
+
+    Args:
+        uv: (C, 2) UV of every corner.
+        face_sizes: (F,) corners per face.
+        face_island: (F,) island of every face, numbered below ``F``.
+        selected: (F,) faces that belong to their island; default all.
+
+    Returns:
+        float64 rotation of every island (one more than the largest island number, one per
+        hull of ``island_hulls``), radians counter-clockwise, in ``[-pi/4, pi/4)`` (a quarter
+        turn more or less gives the same box on its side). Exactly 0 for an island whose box
+        as it lies is within a factor ``1 + 1e-6`` of the least, and for one whose hull is
+        empty (no area, or a non-finite UV).
+
+    Raises:
+        InputError: wrong shape, dtype or length, or an island number not below ``F`` (the
+            message names the face).
+    """
+
 def plan_seams(
     positions: _Floats,
     corner_verts: _Ints,
