@@ -10,7 +10,8 @@ Needs no Blender.  Baselines: ``uvunwrap`` (PyPI: segmentation, flattening and p
 xatlas, with its defaults) and ``xatlas`` (PyPI ``xatlas``, the C++ library's bindings; slow
 at this scale, so not run by default).  A scan is a shared closed mesh subdivided ``L`` times (each triangle into
 four at its edge midpoints, so the surface keeps its shape): ``bunny:2`` has 111,456
-triangles, ``fertility:3`` 576,000.  Every row runs in a fresh Python subprocess under
+triangles, ``fertility:3`` 576,000; ``bunny:2:100:3`` loses 100 holes of 30 faces as scans
+lose surface (``robustness.holes``, seed 3).  Every row runs in a fresh Python subprocess under
 ``/usr/bin/time -v``: the child builds the mesh, runs the unwrap (``uvflat.unwrap`` with
 automatic seams, or ``xatlas.parametrize``) and prints its wall seconds, islands, whether every
 island keeps the atlas rule and the pipeline phases; the parent reads the child's peak
@@ -41,7 +42,7 @@ import json, sys, time
 import numpy as np
 sys.path.insert(0, {here!r})
 import common
-name, levels, job = {name!r}, {levels}, {job!r}
+name, levels, job, holes = {name!r}, {levels}, {job!r}, {holes!r}
 P, cv, fs = common.read_off({path!r})
 P = np.asarray(P, float); tri = np.asarray(cv, np.int64).reshape(-1, 3)
 for _ in range(levels):
@@ -52,6 +53,11 @@ for _ in range(levels):
     a, b, c = tri.T
     ab, bc, ca = mid.T
     tri = np.concatenate([np.stack(x, 1) for x in ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca))])
+if holes:
+    import robustness
+    count, seed = holes
+    P, cv, fs = robustness.holes((P, tri.reshape(-1), np.full(len(tri), 3)), count, HOLE_FACES, seed)
+    P = np.asarray(P, float); tri = np.asarray(cv, np.int64).reshape(-1, 3)
 out = dict(triangles=len(tri))
 if job == "uvunwrap":
     import uvunwrap
@@ -79,9 +85,25 @@ print("RESULT " + json.dumps(out))
 """
 
 
-def run_child(name, levels, job):
-    code = CHILD.format(here=str(HERE), name=name, levels=levels, job=job,
-                        path=str(SHARED / f"{name}.off"))
+# Faces of each hole a ``NAME:LEVELS:HOLES[:SEED]`` scan loses.
+HOLE_FACES = 30
+
+
+def parse_spec(spec):
+    """``(name, levels, holes, label)`` of ``NAME:LEVELS[:HOLES[:SEED]]``; ``holes`` is
+    ``(count, seed)`` or ``None``."""
+    parts = spec.split(":")
+    if not 2 <= len(parts) <= 4:
+        raise SystemExit(f"scan_benchmark: {spec!r} is not NAME:LEVELS[:HOLES[:SEED]]")
+    name, levels = parts[0], int(parts[1])
+    holes = (int(parts[2]), int(parts[3]) if len(parts) == 4 else 1) if len(parts) >= 3 else None
+    label = f"{name}×{levels}" + (f", {holes[0]} holes (seed {holes[1]})" if holes else "")
+    return name, levels, holes, label
+
+
+def run_child(name, levels, job, holes=None):
+    code = CHILD.replace("HOLE_FACES", str(HOLE_FACES)).format(
+        here=str(HERE), name=name, levels=levels, job=job, holes=holes, path=str(SHARED / f"{name}.off"))
     proc = subprocess.run(["/usr/bin/time", "-v", sys.executable, "-c", code],
                           capture_output=True, text=True)
     result = None
@@ -99,7 +121,8 @@ def run_child(name, levels, job):
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--meshes", default="bunny:2,fertility:3",
-                        help="comma-separated NAME:LEVELS (shared closed .off mesh, subdivisions)")
+                        help="comma-separated NAME:LEVELS[:HOLES[:SEED]] (shared closed .off mesh, "
+                             "subdivisions, holes of 30 faces cut in as scans lose surface, their seed)")
     parser.add_argument("--methods", default="abf,slim")
     parser.add_argument("--baselines", default="uvunwrap",
                         help="comma-separated: uvunwrap, xatlas (the first is the ratio's reference)")
@@ -114,12 +137,11 @@ def main(argv=None):
              "|---|---:|---|---:|---:|---:|---:|---|"]
     phases = []
     for spec in args.meshes.split(","):
-        name, levels = spec.split(":")
-        levels = int(levels)
-        base = run_child(name, levels, "baseline")
+        name, levels, holes, label = parse_spec(spec)
+        base = run_child(name, levels, "baseline", holes)
         rows = {}
         for job in baselines + args.methods.split(","):
-            runs = [run_child(name, levels, job) for _ in range(args.repeat)]
+            runs = [run_child(name, levels, job, holes) for _ in range(args.repeat)]
             r = runs[0]
             r["seconds"] = statistics.median(x["seconds"] for x in runs)
             r["peak_kb"] = max(x.get("peak_kb", 0) for x in runs)
@@ -130,11 +152,11 @@ def main(argv=None):
             kb = (r.get("peak_kb", 0) - base.get("peak_kb", 0)) / tris
             rule = "—" if job in baselines else ("yes" if r["rule"] else "no")
             islands = "—" if r["islands"] is None else str(r["islands"])
-            lines.append(f"| {name}×{levels} | {tris:,} | {job} | {r['seconds']:.2f} | {ratio:.2f} | "
+            lines.append(f"| {label} | {tris:,} | {job} | {r['seconds']:.2f} | {ratio:.2f} | "
                          f"{kb:.2f} | {islands} | {rule} |")
             if "phases" in r:
                 p = r["phases"]
-                phases.append(f"{name}×{levels} {job}: plan cuts {p['plan_cuts']:.2f} s "
+                phases.append(f"{label} {job}: plan cuts {p['plan_cuts']:.2f} s "
                               f"({p.get('predicted_rounds', 0)} predicted rounds; cutting state "
                               f"{p.get('cut_state', 0):.2f}, cone placement {p.get('cone_placement', 0):.2f}, "
                               f"split plans {p.get('split_plans', 0):.2f}, cut graphs "

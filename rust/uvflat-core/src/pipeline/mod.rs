@@ -188,7 +188,7 @@ fn road(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], depth: us
         // A large disk whose outline crosses itself at a few places keeps its map: the faces
         // there become islands of their own.
         let mut peeled = vec![first];
-        peel::apply(ctx, chart, &mut peeled);
+        peel::apply(ctx, chart, base_seams, &mut peeled);
         // A peel replaces the chart's own solve (`chart: None`) by rebuilt pieces.
         if peeled.len() != 1 || peeled[0].chart.is_some() {
             return peeled;

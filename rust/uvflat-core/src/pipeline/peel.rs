@@ -18,14 +18,24 @@
 //!    a second try, the other). The patch is the faces within `r` rings (by shared vertices) of the
 //!    peeled triangles' vertices, for `r` in [`RINGS`], never more than [`MAX_PATCH_SHARE`]
 //!    of the piece's faces. An outline that only touches itself overlaps no triangle: the
-//!    touching segments ([`crate::metrics::closed_seams::outline_crossings`]) stand in for them;
-//! 2. the piece rebuilt with the patch's border as seams: the rest keeps its UVs and is
-//!    measured again, the patch's pieces are solved with the method;
+//!    touching segments ([`crate::metrics::closed_seams::outline_crossings`]) stand in for them.
+//!    Where it does both (two sides of a cut lying on each other nearly, as across rough
+//!    surface, besides overlapping triangles elsewhere), a third try peels one side of the
+//!    overlaps and both segments of every crossing;
+//! 2. the piece rebuilt with the patch's border as seams (and without the piece's own cuts
+//!    that run inside the patch, so a patch that straddles a cut is one piece, not a scatter
+//!    of small islands; the user's seams and earlier splits' stay): the rest keeps its UVs and
+//!    is measured again, the patch's pieces are solved with the method. A patch piece that
+//!    breaks the rule as it is (a ring of faces around a hole of the surface is an annulus;
+//!    on rough surface the cuts joining holes cross their own sides) takes the pipeline's
+//!    road without a split (its holes joined to its outline, cones), then the last resort
+//!    ([`super::last_resort`]): a small island by another method rather than the whole
+//!    piece split and solved again;
 //! 3. the first attempt whose pieces all keep the rule replaces the piece, its border added
 //!    to the seams. Otherwise the piece is left as it was (the repair's rounds and split
 //!    follow as before).
 //!
-//! Bounded: at most `2 × RINGS.len()` rebuilds of a piece. Deterministic: overlapping pairs
+//! Bounded: at most `3 × RINGS.len()` rebuilds of a piece. Deterministic: overlapping pairs
 //! and sides in index order, rings and borders in face order.
 
 use super::outcome::{ChartStatus, Problem};
@@ -37,27 +47,37 @@ use crate::charts::{build_charts_with, Chart};
 /// little there, and they keep the piece whole or in halves instead of adding small islands.
 pub const PEEL_FROM: usize = 100_000;
 
-/// Most pairs of touching outline segments whose faces a peel takes when no triangles
-/// overlap.
+/// Most pairs of touching or crossing outline segments whose faces a peel takes (when no
+/// triangles overlap, or in its last try).
 pub const MAX_TOUCHES: usize = 64;
 
 /// Rings of faces around the crossings tried, in order.
 pub const RINGS: [usize; 3] = [1, 2, 4];
 
-/// Largest share of a piece's faces a patch may take.
-pub const MAX_PATCH_SHARE: f64 = 0.05;
+/// Largest share of a piece's faces a patch may take. On a scan with many holes (the bunny
+/// subdivided twice with 100 holes of 30 faces, `tests/scan_holes.rs`) the cuts joining the
+/// holes cross their own sides at 50 places, and the patch around them takes 10.6% of the
+/// faces: with 5% the peel gave up, and the chart was split four levels deep (52 solves, 30 s)
+/// to be mapped by another method in the end.
+pub const MAX_PATCH_SHARE: f64 = 0.15;
 
 /// The note a peeled piece's report carries.
 const NOTE: &str = "its outline crossed itself: the faces there were made an island of their own";
 
 /// Peel every piece of `pieces` that qualifies (see the module docs); `original`: the chart
 /// a piece without a chart of its own stands for.
-pub fn apply(ctx: &Context<'_, '_>, original: &Chart, pieces: &mut Vec<Piece>) {
-    apply_from(ctx, original, pieces, PEEL_FROM);
+pub fn apply(ctx: &Context<'_, '_>, original: &Chart, base_seams: &[[u32; 2]], pieces: &mut Vec<Piece>) {
+    apply_from(ctx, original, base_seams, pieces, PEEL_FROM);
 }
 
 /// [`apply`] to pieces of at least `min_triangles` triangles.
-fn apply_from(ctx: &Context<'_, '_>, original: &Chart, pieces: &mut Vec<Piece>, min_triangles: usize) {
+fn apply_from(
+    ctx: &Context<'_, '_>,
+    original: &Chart,
+    base_seams: &[[u32; 2]],
+    pieces: &mut Vec<Piece>,
+    min_triangles: usize,
+) {
     let mut k = 0;
     while k < pieces.len() {
         let replaced = {
@@ -68,7 +88,7 @@ fn apply_from(ctx: &Context<'_, '_>, original: &Chart, pieces: &mut Vec<Piece>, 
                 && ctx.rule.broken(&p.report) == Some(Problem::Overlap)
                 && !super::pinned(ctx, chart);
             if due {
-                peel(ctx, chart, p)
+                peel(ctx, chart, base_seams, p)
             } else {
                 None
             }
@@ -86,7 +106,7 @@ fn apply_from(ctx: &Context<'_, '_>, original: &Chart, pieces: &mut Vec<Piece>, 
 }
 
 /// The pieces that replace `piece` (of `chart`), or `None` when no attempt keeps the rule.
-fn peel(ctx: &Context<'_, '_>, chart: &Chart, piece: &Piece) -> Option<Vec<Piece>> {
+fn peel(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], piece: &Piece) -> Option<Vec<Piece>> {
     let uv = piece.uv.as_ref()?;
     let polygons = crate::cuts::graph::face_polygons(ctx.mesh, chart);
     let vertex_faces = vertex_faces(&polygons, chart.positions.len());
@@ -110,16 +130,31 @@ fn peel(ctx: &Context<'_, '_>, chart: &Chart, piece: &Piece) -> Option<Vec<Piece
         at += polygons[i].len();
     }
     let limit = (MAX_PATCH_SHARE * polygons.len() as f64) as usize;
+    // The seams given before this piece's cuts (the user's, earlier splits'), sorted pairs.
+    let mut kept: Vec<[u32; 2]> = base_seams.iter().map(|&[a, b]| [a.min(b), a.max(b)]).collect();
+    kept.sort_unstable();
     // Where the outline crosses itself, the triangles on its two sides overlap (often along
     // a strip, not at one point): the patch holds the overlapping triangles of one side. An
     // outline that only touches itself overlaps no triangle: the patch holds the touching
     // segments of one side.
-    let mut sides = overlap_sides(chart, uv);
-    if sides.iter().all(|s| s.is_empty()) {
-        let loops = &chart.boundary_loops;
-        let touching =
-            crate::metrics::closed_seams::outline_crossings(&chart.positions, &chart.triangles, uv, loops, MAX_TOUCHES);
-        sides = [0, 1].map(|k| touching.iter().flat_map(|c| c[k]).collect());
+    let overlapping = overlap_sides(chart, uv);
+    let loops = &chart.boundary_loops;
+    let touching =
+        crate::metrics::closed_seams::outline_crossings(&chart.positions, &chart.triangles, uv, loops, MAX_TOUCHES);
+    let mut sides: Vec<Vec<u32>> = if overlapping.iter().all(|s| s.is_empty()) {
+        [0, 1].map(|k| touching.iter().flat_map(|c| c[k]).collect()).to_vec()
+    } else {
+        overlapping.to_vec()
+    };
+    if !overlapping[0].is_empty() && !touching.is_empty() {
+        // Last: where the outline crosses itself without triangles overlapping (two sides of
+        // a cut lying on each other nearly, as across rough surface), the rest would still
+        // cross itself: one side of the overlaps and both segments of every crossing.
+        let mut both = overlapping[0].clone();
+        both.extend(touching.iter().flat_map(|c| c[0].into_iter().chain(c[1])));
+        both.sort_unstable();
+        both.dedup();
+        sides.push(both);
     }
     for seeds in sides.iter().filter(|s| !s.is_empty()) {
         for &r in &RINGS {
@@ -131,7 +166,16 @@ fn peel(ctx: &Context<'_, '_>, chart: &Chart, piece: &Piece) -> Option<Vec<Piece
             if border.is_empty() {
                 continue;
             }
-            let mut seams = outline.clone();
+            // The cuts made for this piece with both sides in the patch are undone there (the
+            // patch's pieces are cut again on their own road): a patch that straddles a cut is
+            // one piece, not a scatter of small islands. The user's seams and those of earlier
+            // splits stay.
+            let inner = inner_edges(chart, &polygons, &patch);
+            let mut seams: Vec<[u32; 2]> = outline
+                .iter()
+                .filter(|e| inner.binary_search(e).is_err() || kept.binary_search(e).is_ok())
+                .copied()
+                .collect();
             seams.extend_from_slice(&border);
             seams.sort_unstable();
             seams.dedup();
@@ -146,17 +190,44 @@ fn peel(ctx: &Context<'_, '_>, chart: &Chart, piece: &Piece) -> Option<Vec<Piece
                 } else {
                     keep_uvs(ctx, chart, piece, uv, &c, &face_at, &corner_start)
                 };
-                valid &= report.status.mapped() && ctx.rule.broken(&report).is_none();
-                out.push(Piece::new(Some(c), report, uv, flips, Vec::new()));
+                let keeps = report.status.mapped() && ctx.rule.broken(&report).is_none();
+                if keeps {
+                    out.push(Piece::new(Some(c), report, uv, flips, Vec::new()));
+                    continue;
+                }
+                if !in_patch {
+                    valid = false;
+                    break;
+                }
+                // A patch piece that breaks the rule as it is (a ring of faces around a hole
+                // of the surface is an annulus) takes the pipeline's road without a split: its
+                // holes joined to its outline, cones; then the last resort (a small island by
+                // another method rather than the whole piece solved again or split).
+                let mut list = super::run(ctx, c, &seams, crate::cuts::MAX_SPLIT_DEPTH);
+                let keep = |p: &Piece| p.report.status.mapped() && ctx.rule.broken(&p.report).is_none();
+                if !list.iter().all(keep) {
+                    super::last_resort::apply(ctx, chart, &mut list, "its cones");
+                }
+                valid = list.iter().all(keep);
+                out.extend(list);
                 if !valid {
                     break;
                 }
             }
             if valid && !out.is_empty() {
-                let length = super::repair::split_length(ctx.mesh, &border);
+                // The piece's cuts undone inside the patch are seams no more.
+                let undone = |e: &[u32; 2]| {
+                    let e = [e[0].min(e[1]), e[0].max(e[1])];
+                    inner.binary_search(&e).is_ok() && kept.binary_search(&e).is_err()
+                };
+                let (gone, mut seams): (Vec<[u32; 2]>, Vec<[u32; 2]>) = piece.seams.iter().partition(|e| undone(e));
+                let length = super::repair::split_length(ctx.mesh, &border)
+                    - super::repair::split_length(ctx.mesh, &gone);
+                seams.extend_from_slice(&border);
                 let first = &mut out[0];
-                first.seams = piece.seams.clone();
-                first.seams.extend_from_slice(&border);
+                // (a patch piece that took the pipeline's road carries the cuts made there)
+                seams.append(&mut first.seams);
+                first.seams = seams;
                 first.report.cones = piece.report.cones;
                 first.report.cut_length = piece.report.cut_length + length;
                 return Some(out);
@@ -400,6 +471,23 @@ fn border_edges(chart: &Chart, polygons: &[Vec<u32>], vertex_faces: &[Vec<u32>],
     out
 }
 
+/// Mesh edges (sorted pairs, sorted) of which two faces of `patch` are sides: the chart's
+/// own cuts running inside the patch.
+fn inner_edges(chart: &Chart, polygons: &[Vec<u32>], patch: &[bool]) -> Vec<[u32; 2]> {
+    let mut sides: Vec<[u32; 2]> = Vec::new();
+    for (f, poly) in polygons.iter().enumerate() {
+        if patch[f] {
+            for i in 0..poly.len() {
+                sides.push(mesh_pair(chart, poly[i], poly[(i + 1) % poly.len()]));
+            }
+        }
+    }
+    sides.sort_unstable();
+    let mut out: Vec<[u32; 2]> = sides.windows(2).filter(|w| w[0] == w[1]).map(|w| w[0]).collect();
+    out.dedup();
+    out
+}
+
 /// The mesh vertices of chart vertices `a` and `b`, sorted.
 fn mesh_pair(chart: &Chart, a: u32, b: u32) -> [u32; 2] {
     let (ma, mb) = (chart.mesh_vertex[a as usize], chart.mesh_vertex[b as usize]);
@@ -494,7 +582,7 @@ mod tests {
         let run = || {
             let piece = Piece::new(Some(chart.clone()), report.clone(), Some(uv.clone()), flips.clone(), Vec::new());
             let mut pieces = vec![piece];
-            apply_from(&ctx, &chart, &mut pieces, 0);
+            apply_from(&ctx, &chart, &[], &mut pieces, 0);
             pieces
         };
         let pieces = run();

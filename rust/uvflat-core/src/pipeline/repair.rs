@@ -212,7 +212,7 @@ pub fn repair<'a>(
         }
         // A large piece whose outline crosses itself at a few places keeps its map: the
         // faces there become islands of their own ([`super::peel`]).
-        super::peel::apply(ctx, chart, &mut pieces);
+        super::peel::apply(ctx, chart, base_seams, &mut pieces);
         ctx.clock.add(|p| {
             p.repair_solve += t.elapsed().as_secs_f64();
             p.repair_pieces += n_pieces;

@@ -1,0 +1,75 @@
+//! A scan with many small holes: every hole is joined to the outline, and on rough surface the
+//! two sides of such a cut cross where the surface is saddle-shaped, at dozens of places over
+//! the chart. The map of the chart is kept where it is sound: the faces around the crossings
+//! are peeled into islands of their own (`pipeline/peel.rs`), each taking the pipeline's road
+//! (its holes joined, then the last resort), instead of the chart being split level after
+//! level and mapped by another method in the end. The outcome does not depend on threads.
+
+mod common;
+
+use common::{load, shared_meshes, subdivide, with_holes, Soup};
+use uvflat_core::charts::{build_charts, ChartKind};
+use uvflat_core::mesh::PolyMesh;
+use uvflat_core::{metrics, unwrap, ChartStatus, Method, UnwrapOptions, Unwrapped};
+
+/// The bunny subdivided twice (111,456 triangles, above the peel's threshold) with 100 holes
+/// of 30 faces.
+fn scan(seed: u64) -> Option<Soup> {
+    let dir = shared_meshes()?;
+    Some(with_holes(&subdivide(&subdivide(&load(&dir.join("bunny.off")))), 100, 30, seed))
+}
+
+/// Every island keeps the rule, the seams reported are those of the islands, and the bulk of
+/// the scan is one island mapped by `method` itself, without a split.
+fn check(s: &Soup, method: &str, r: &Unwrapped) {
+    let m = metrics::measure(&s.positions, &s.corner_verts, &s.face_sizes, &r.uv, None).unwrap();
+    assert_eq!(m.flips, 0, "{method}");
+    assert_eq!(m.overlapping_charts, 0, "{method}: an outline crosses itself");
+    for (c, mc) in r.charts.iter().zip(&m.per_chart) {
+        let ok = matches!(c.status, ChartStatus::Solved | ChartStatus::Fallback);
+        assert!(ok, "{method}: chart {}: {:?}", c.id, c.reason);
+        assert!(mc.density.outside <= 0.05 + 1e-12, "{method}: chart {}: {:.3} outside", c.id, mc.density.outside);
+    }
+    // Each island is a disk between the seams reported, and there are as many as islands.
+    let mesh = PolyMesh::new(&s.positions, &s.corner_verts, &s.face_sizes).unwrap();
+    let charts = build_charts(&mesh, &r.new_seams, None);
+    for ch in &charts {
+        assert_eq!(ch.kind, ChartKind::Disk, "{method}: an island of {} faces is {:?}", ch.faces.len(), ch.kind);
+    }
+    assert_eq!(charts.len(), r.charts.len(), "{method}: charts between the seams reported");
+    assert_eq!(m.charts, r.charts.len(), "{method}: islands measured in UV");
+    // The bulk of the scan is mapped by the method asked for, in one island...
+    let faces = s.face_sizes.len();
+    let main = r.charts.iter().max_by_key(|c| c.faces).unwrap();
+    assert_eq!(main.status, ChartStatus::Solved, "{method}: the main island: {:?}", main.reason);
+    assert_eq!(main.method, method);
+    assert!(main.faces as f64 >= 0.85 * faces as f64, "{method}: the main island has {} of {faces} faces", main.faces);
+    // ... by a bounded number of whole solves: no split of the chart was needed.
+    assert_eq!(r.phases.splits, 0, "{method}: {:?}", r.phases);
+    assert!(r.phases.peels >= 1, "{method}: {:?}", r.phases);
+    // The peeled faces stay in a few dozen islands, at most one of them by another method.
+    assert!(r.charts.len() <= 50, "{method}: {} islands", r.charts.len());
+    let fallbacks = r.charts.iter().filter(|c| c.status == ChartStatus::Fallback).count();
+    assert!(fallbacks <= 1, "{method}: {fallbacks} islands by another method");
+}
+
+#[test]
+fn abf_keeps_its_map_of_a_scan_with_a_hundred_holes_where_it_is_sound() {
+    let Some(s) = scan(4) else { return };
+    let options = UnwrapOptions { method: Method::Abf(Default::default()), ..Default::default() };
+    let r = unwrap(&s.input(), &options).unwrap();
+    check(&s, "abf", &r);
+    // The same on one thread, to the bit.
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+    let one = pool.install(|| unwrap(&s.input(), &options).unwrap());
+    assert_eq!(one.new_seams, r.new_seams);
+    let bits = |uv: &[[f64; 2]]| uv.iter().flat_map(|p| [p[0].to_bits(), p[1].to_bits()]).collect::<Vec<u64>>();
+    assert!(bits(&one.uv) == bits(&r.uv), "the UVs differ on one thread");
+}
+
+#[test]
+fn slim_keeps_its_map_of_a_scan_with_a_hundred_holes_where_it_is_sound() {
+    let Some(s) = scan(3) else { return };
+    let options = UnwrapOptions { method: Method::Slim(Default::default()), ..Default::default() };
+    check(&s, "slim", &unwrap(&s.input(), &options).unwrap());
+}
