@@ -522,7 +522,9 @@ def phase_line(uvflat, name, method, positions, corner_verts, face_sizes, xatlas
             f"split plans {p.get('split_plans', 0):.3f}, cut graphs {p.get('cut_graphs', 0):.3f}), "
             f"first solves {p['solve']:.3f} s, repair solves "
             f"{p['repair_solve']:.3f} s ({p['repair_rounds']} rounds, {p['repair_pieces']} pieces, "
-            f"{p['splits']} splits ({p.get('predicted_splits', 0)} before any solve), {p.get('peels', 0)} peels, "
+            f"{p['splits']} splits ({p.get('predicted_splits', 0)} before any solve, "
+            f"{p.get('far_splits', 0)} after one), "
+            f"{p.get('peels', 0)} peels, "
             f"{p.get('last_resort', 0)} last-resort solves), measure {p['measure']:.3f} s; whole call {seconds:.3f} s"
             f"{ratio}, {len(r.charts)} islands")
 

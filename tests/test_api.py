@@ -1522,7 +1522,7 @@ def test_phases_account_for_the_pipeline():
     parts = {"cut_state", "cone_placement", "split_plans", "cut_graphs"}
     assert set(p) == {"build_charts", "plan_cuts", "solve", "repair_solve", "measure",
                       "predicted_rounds", "repair_rounds", "repair_pieces", "splits", "predicted_splits",
-                      "crease_cuts", "peels", "last_resort"} | parts
+                      "far_splits", "crease_cuts", "peels", "last_resort"} | parts
     assert all(v >= 0 for v in p.values())
     # The parts of plan_cuts add up to it; a cube planned on the prediction has cutting state,
     # placed cones and cut graphs.

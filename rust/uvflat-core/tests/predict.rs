@@ -131,3 +131,25 @@ fn a_plan_predicted_above_the_mean_limit_is_split_before_any_solve() {
     let slim = unwrap(&s.input(), &UnwrapOptions { method: Method::Slim(slim::SlimOptions::default()), ..Default::default() }).unwrap();
     assert_eq!(slim.phases.predicted_splits, 0);
 }
+
+/// A method whose map is far from a plan that keeps the rule (LSCM's free boundary crushes
+/// regions the prediction does not) is split after its first solve: cones placed on the
+/// prediction do not bring such a map back. ABF's map follows the prediction and is never
+/// sent that way; SLIM plans no prediction.
+#[test]
+fn a_map_far_from_its_plan_is_split_after_one_solve() {
+    let Some(dir) = common::shared_meshes() else { return };
+    let s = common::load(&dir.join("camelhead.off"));
+    let run = |method: Method| unwrap(&s.input(), &UnwrapOptions { method, ..Default::default() }).unwrap();
+    let lscm = run(Method::Lscm);
+    assert!(lscm.phases.far_splits >= 1, "{:?}", lscm.phases);
+    assert!(lscm.phases.splits >= lscm.phases.far_splits, "{:?}", lscm.phases);
+    let options = UnwrapOptions::default();
+    let rule = uvflat_core::pipeline::rule::AtlasRule { max_stretch: options.auto_seams.max_stretch, full: true };
+    for c in &lscm.charts {
+        assert!(matches!(c.status.name(), "solved" | "fallback"), "chart {}: {:?}", c.id, c.reason);
+        assert!(rule.broken(c).is_none(), "chart {} breaks the rule: {:?}", c.id, rule.broken(c));
+    }
+    assert_eq!(run(Method::Abf(abf::AbfOptions::default())).phases.far_splits, 0);
+    assert_eq!(run(Method::Slim(slim::SlimOptions::default())).phases.far_splits, 0);
+}

@@ -198,6 +198,8 @@ impl PyUnwrapResult {
     /// ``repair_rounds``, ``repair_pieces``, ``splits``, ``crease_cuts`` (hard-surface charts
     /// cut along their creases first), ``predicted_splits`` (splits made
     /// before any solve, the chart's predicted mean area distortion being too high),
+    /// ``far_splits`` (charts split after one solve, the method's map being far from a plan
+    /// predicted to keep the rule),
     /// ``peels`` (large pieces whose outline crossed itself, made valid by making the faces
     /// there islands of their own) and ``last_resort`` (solves of the last
     /// resort, the method's flip-free kin then ``scaffold``, for pieces whose repair still broke
@@ -221,6 +223,7 @@ impl PyUnwrapResult {
         d.set_item("splits", p.splits)?;
         d.set_item("crease_cuts", p.crease_cuts)?;
         d.set_item("predicted_splits", p.predicted_splits)?;
+        d.set_item("far_splits", p.far_splits)?;
         d.set_item("peels", p.peels)?;
         d.set_item("last_resort", p.last_resort)?;
         Ok(d)

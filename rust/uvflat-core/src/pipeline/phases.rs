@@ -42,6 +42,9 @@ pub struct Phases {
     /// the rule with a mean area distortion above
     /// [`crate::pipeline::repair::MEAN_AREA_LIMIT`].
     pub predicted_splits: usize,
+    /// Charts sent to the split after their first solve, the method's map being far from a
+    /// plan whose prediction kept the rule ([`crate::pipeline::repair::FAR_FROM_PLAN`]).
+    pub far_splits: usize,
     /// Pieces whose outline crossed itself made valid by peeling the faces at the crossings
     /// into islands of their own ([`crate::pipeline::peel`]).
     pub peels: usize,

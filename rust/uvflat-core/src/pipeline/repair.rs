@@ -12,7 +12,9 @@
 //! `CONES_PER_ROUND`; a flip or zero-area triangle counts as crushed), and re-cuts. A round
 //! that does not bring the chart clearly nearer the rule (`PROGRESS`) is not built on: after
 //! several cones at once, the rounds go back to the best attempt and add one cone at a time;
-//! after one cone, they end and the chart is split (each round is a whole solve). An attempt
+//! after one cone, they end and the chart is split (each round is a whole solve). A first
+//! map far from a plan whose prediction keeps the rule ([`FAR_FROM_PLAN`]) gets no cone
+//! rounds: the chart is split (`Phases::far_splits`). An attempt
 //! whose only problem is an outline that crosses itself gets one more round with one cone at
 //! most (several cones rarely uncross an outline; a split does), except on a large chart
 //! (`OUTLINE_RETRY_BELOW`), where that round is a costly solve that did not help. The
@@ -168,6 +170,7 @@ pub fn repair<'a>(
             0
         }
     });
+    let plan_kept = plan.as_ref().is_some_and(|p| p.keeps_rule);
     let mut planned = plan.and_then(|p| p.cut);
     for round in 0..=rounds {
         if crate::progress::cancelled() {
@@ -230,6 +233,7 @@ pub fn repair<'a>(
         // margin is not built on: when it added several cones, the next round goes back to
         // the best attempt and adds one (at its most crushed region); otherwise the rounds end
         // (more cones where they did not help cost a whole solve each; the chart is split).
+        let far = round == 0 && plan_kept && far_from_plan(&pieces);
         let progress = best.is_empty() || clearly_better(ctx, &pieces, &best);
         if best.is_empty() || better(ctx, &pieces, &best) {
             best = pieces;
@@ -237,6 +241,16 @@ pub fn repair<'a>(
             best_next = next.clone();
         }
         if valid {
+            break;
+        }
+        if far {
+            // The plan's flattening keeps the rule and the method's map is far from it (a
+            // linear conformal map's free boundary crushing a region the prediction does
+            // not): cones placed on the prediction do not bring it back, a split does
+            // (`lscm` on the camel head: 26 whole solves before, 13 now).
+            if depth < cuts::MAX_SPLIT_DEPTH && chart.faces.len() >= 2 {
+                ctx.clock.add(|p| p.far_splits += 1);
+            }
             break;
         }
         if only_outline && (single || chart.triangles.len() >= OUTLINE_RETRY_BELOW) {
@@ -376,6 +390,16 @@ fn only_overlaps(ctx: &Context<'_, '_>, pieces: &[Piece]) -> bool {
     pieces.iter().all(|p| {
         p.report.status.mapped() && matches!(ctx.rule.broken(&p.report), None | Some(super::outcome::Problem::Overlap))
     })
+}
+
+/// A piece with more than this share of its area outside the density bound is far from a plan
+/// whose prediction keeps the rule (at most 5% outside): see [`repair`].
+pub const FAR_FROM_PLAN: f64 = 0.25;
+
+/// Whether a mapped piece of `pieces` has more than [`FAR_FROM_PLAN`] of its area outside
+/// the density bound.
+fn far_from_plan(pieces: &[Piece]) -> bool {
+    pieces.iter().any(|p| p.report.status.mapped() && p.report.density.outside > FAR_FROM_PLAN)
 }
 
 /// A chart of at least this many triangles has its split's halves go through the pipeline

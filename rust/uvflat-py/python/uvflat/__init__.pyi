@@ -218,7 +218,8 @@ class UnwrapResult:
         ``predicted_rounds``, ``repair_rounds``, ``repair_pieces``, ``splits``,
         ``crease_cuts`` (hard-surface charts cut along their creases first),
         ``predicted_splits`` (splits made before any solve, the chart's predicted mean area
-        distortion being too high), ``peels`` (large pieces whose outline crossed itself,
+        distortion being too high), ``far_splits`` (charts split after one solve, the method's
+        map being far from a plan predicted to keep the rule), ``peels`` (large pieces whose outline crossed itself,
         made valid by making the faces there islands of their own), ``last_resort`` (solves of the last resort, the method's flip-free kin then ``scaffold``,
         for pieces whose repair still broke the atlas rule)."""
     def as_dict(self) -> dict[str, Any]:
