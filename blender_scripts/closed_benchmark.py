@@ -525,7 +525,8 @@ def phase_line(uvflat, name, method, positions, corner_verts, face_sizes, xatlas
             f"{p['splits']} splits ({p.get('predicted_splits', 0)} before any solve, "
             f"{p.get('far_splits', 0)} after one), "
             f"{p.get('peels', 0)} peels, "
-            f"{p.get('last_resort', 0)} last-resort solves), measure {p['measure']:.3f} s; whole call {seconds:.3f} s"
+            f"{p.get('last_resort', 0)} last-resort solves), "
+            f"{p.get('glued', 0)} small islands glued, measure {p['measure']:.3f} s; whole call {seconds:.3f} s"
             f"{ratio}, {len(r.charts)} islands")
 
 

@@ -786,6 +786,29 @@ def test_real_alligator_near_developable():
     assert abs(m.conformal - rep.conformal) < 1e-9
 
 
+@pytest.mark.parametrize("method", ["abf", "slim"])
+def test_small_islands_are_laid_on_the_islands_around_them(method):
+    """3holes with three large holes: the cuts joining the holes leave a few faces between
+    them and the outline as islands of their own (28 of the 34 islands had under 10 faces).
+    Their faces are laid on the islands around them where they fit: few islands, every one
+    keeps the rule, and the seams reported are exactly the islands' borders."""
+    from pathlib import Path
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "blender_scripts"))
+    import robustness
+    pos, cv, fs = robustness.holes(read_mesh("3holes.off"), 3, 600, 2)
+    r = uvflat.unwrap(pos, cv, fs, method=method)
+    assert r.phases["glued"] >= 10, r.phases
+    assert len(r.charts) <= 10, [c.faces for c in r.charts]
+    assert all(c.status in ("solved", "fallback") and c.density_outside <= 0.05 for c in r.charts)
+    m = uvflat.metrics(pos, cv, fs, r.uv)
+    assert m.flips == 0 and m.overlapping_charts == 0 and m.charts == len(r.charts)
+    # The seams reported cut the mesh into exactly these islands, each a disk.
+    split = uvflat.unwrap(pos, cv, fs, method="tutte", seams=r.new_seams, auto_seams=False)
+    assert len(split.charts) == len(r.charts)
+    assert all(c.kind == "disk" for c in split.charts)
+    assert sorted(c.faces for c in split.charts) == sorted(c.faces for c in r.charts)
+
+
 def test_real_halftunnel_quads_with_holes():
     pos, cv, fs = read_mesh("halftunnel.off")
     r = uvflat.unwrap(pos, cv, fs, method="lscm")
@@ -1522,7 +1545,7 @@ def test_phases_account_for_the_pipeline():
     parts = {"cut_state", "cone_placement", "split_plans", "cut_graphs"}
     assert set(p) == {"build_charts", "plan_cuts", "solve", "repair_solve", "measure",
                       "predicted_rounds", "repair_rounds", "repair_pieces", "splits", "predicted_splits",
-                      "far_splits", "crease_cuts", "peels", "last_resort"} | parts
+                      "far_splits", "crease_cuts", "peels", "last_resort", "glue", "glued"} | parts
     assert all(v >= 0 for v in p.values())
     # The parts of plan_cuts add up to it; a cube planned on the prediction has cutting state,
     # placed cones and cut graphs.

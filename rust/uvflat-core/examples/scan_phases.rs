@@ -31,5 +31,9 @@ fn main() {
     );
     let len: f64 = r.new_seams.iter().map(|e| { let (a, b) = (s.positions[e[0] as usize], s.positions[e[1] as usize]); ((a[0]-b[0]).powi(2)+(a[1]-b[1]).powi(2)+(a[2]-b[2]).powi(2)).sqrt() }).sum();
     println!("seam length {len:.4}");
+    let mut sizes: Vec<usize> = r.charts.iter().map(|c| c.faces).collect();
+    sizes.sort_unstable();
+    let small = sizes.iter().filter(|&&n| n < 10).count();
+    println!("islands under 10 faces: {small}, smallest {:?}", &sizes[..sizes.len().min(12)]);
     println!("{:?}", r.phases);
 }

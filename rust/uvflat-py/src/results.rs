@@ -201,9 +201,10 @@ impl PyUnwrapResult {
     /// ``far_splits`` (charts split after one solve, the method's map being far from a plan
     /// predicted to keep the rule),
     /// ``peels`` (large pieces whose outline crossed itself, made valid by making the faces
-    /// there islands of their own) and ``last_resort`` (solves of the last
+    /// there islands of their own), ``last_resort`` (solves of the last
     /// resort, the method's flip-free kin then ``scaffold``, for pieces whose repair still broke
-    /// the atlas rule).
+    /// the atlas rule), ``glued`` (small islands whose faces were laid on the islands around
+    /// them) and ``glue`` (its seconds, summed over threads).
     #[getter]
     fn phases<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let p = &self.phases;
@@ -226,6 +227,8 @@ impl PyUnwrapResult {
         d.set_item("far_splits", p.far_splits)?;
         d.set_item("peels", p.peels)?;
         d.set_item("last_resort", p.last_resort)?;
+        d.set_item("glue", p.glue)?;
+        d.set_item("glued", p.glued)?;
         Ok(d)
     }
 

@@ -33,11 +33,14 @@
 //! 6. Last resort: [`last_resort::apply`] maps a piece that still breaks the rule after its
 //!    repair by the method's flip-free kin or by `scaffold` (globally bijective), reported as
 //!    a fallback.
+//! 7. Glue: [`glue::apply`] lays the faces of small islands left by the steps above on the
+//!    islands around them where they fit, keeping those islands' maps.
 //!
 //! A new step is one file here; the outcome of every chart is a typed value
 //! ([`outcome::ChartStatus`], [`outcome::Problem`]).
 
 pub mod creases;
+pub mod glue;
 pub mod last_resort;
 pub mod outcome;
 pub mod peel;
@@ -134,7 +137,9 @@ fn chart_area(chart: &Chart) -> f64 {
 /// Take one input chart through the pipeline (`base_seams`: the user's seams). A piece that
 /// is the chart itself, uncut, carries `chart: None`.
 pub fn run_chart(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]]) -> Vec<Piece> {
-    road(ctx, chart, base_seams, 0)
+    let mut pieces = road(ctx, chart, base_seams, 0);
+    glue::apply(ctx, chart, &mut pieces);
+    pieces
 }
 
 /// [`run_chart`] for an owned piece (a half of a split) at split depth `depth`: every piece

@@ -52,6 +52,11 @@ pub struct Phases {
     /// method's flip-free kin, then `scaffold` ([`crate::pipeline::last_resort`]; each also
     /// counted in `repair_pieces`).
     pub last_resort: usize,
+    /// Laying small islands' faces on their neighbours ([`crate::pipeline::glue`]), summed
+    /// over charts.
+    pub glue: f64,
+    /// Small islands glued whole onto their neighbours ([`crate::pipeline::glue`]).
+    pub glued: usize,
     /// Per-face quality of the result (wall clock).
     pub measure: f64,
 }

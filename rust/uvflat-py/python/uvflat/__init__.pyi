@@ -221,7 +221,8 @@ class UnwrapResult:
         distortion being too high), ``far_splits`` (charts split after one solve, the method's
         map being far from a plan predicted to keep the rule), ``peels`` (large pieces whose outline crossed itself,
         made valid by making the faces there islands of their own), ``last_resort`` (solves of the last resort, the method's flip-free kin then ``scaffold``,
-        for pieces whose repair still broke the atlas rule)."""
+        for pieces whose repair still broke the atlas rule), ``glued`` (small islands whose
+        faces were laid on the islands around them) and ``glue`` (its seconds)."""
     def as_dict(self) -> dict[str, Any]:
         """All fields as a plain dict (arrays included, chart reports as dicts)."""
 
