@@ -67,6 +67,30 @@ fn abf_keeps_its_map_of_a_scan_with_a_hundred_holes_where_it_is_sound() {
     assert!(bits(&one.uv) == bits(&r.uv), "the UVs differ on one thread");
 }
 
+/// On seed 4 the overlapping sides of `slim`'s map take 21% of the chart: the patch is peeled
+/// (at most a quarter of the chart) rather than the chart split eight times and mapped by
+/// `scaffold` in sixths.
+#[test]
+fn slim_peels_a_large_overlap_instead_of_splitting() {
+    let Some(s) = scan(4) else { return };
+    let options = UnwrapOptions { method: Method::Slim(Default::default()), ..Default::default() };
+    let r = unwrap(&s.input(), &options).unwrap();
+    let m = metrics::measure(&s.positions, &s.corner_verts, &s.face_sizes, &r.uv, None).unwrap();
+    assert!(m.flips == 0 && m.overlapping_charts == 0);
+    for (c, mc) in r.charts.iter().zip(&m.per_chart) {
+        assert!(matches!(c.status, ChartStatus::Solved | ChartStatus::Fallback), "chart {}: {:?}", c.id, c.reason);
+        assert!(mc.density.outside <= 0.05 + 1e-12, "chart {}: {:.3} outside", c.id, mc.density.outside);
+    }
+    assert_eq!(r.phases.splits, 0, "{:?}", r.phases);
+    assert!(r.phases.peels >= 1, "{:?}", r.phases);
+    let faces = s.face_sizes.len();
+    let main = r.charts.iter().max_by_key(|c| c.faces).unwrap();
+    assert_eq!(main.method, "slim");
+    assert!(main.faces as f64 >= 0.5 * faces as f64, "the main island has {} of {faces} faces", main.faces);
+    let fallbacks = r.charts.iter().filter(|c| c.status == ChartStatus::Fallback).count();
+    assert!(fallbacks <= 1 && r.charts.len() <= 50, "{fallbacks} fallbacks, {} islands", r.charts.len());
+}
+
 #[test]
 fn slim_keeps_its_map_of_a_scan_with_a_hundred_holes_where_it_is_sound() {
     let Some(s) = scan(3) else { return };
