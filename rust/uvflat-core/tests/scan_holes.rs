@@ -7,10 +7,8 @@
 
 mod common;
 
-use common::{load, shared_meshes, subdivide, with_holes, Soup};
-use uvflat_core::charts::{build_charts, ChartKind};
-use uvflat_core::mesh::PolyMesh;
-use uvflat_core::{metrics, unwrap, ChartStatus, Method, UnwrapOptions, Unwrapped};
+use common::{assert_islands_keep_the_rule, load, shared_meshes, subdivide, with_holes, Soup};
+use uvflat_core::{unwrap, ChartStatus, Method, UnwrapOptions, Unwrapped};
 
 /// The bunny subdivided twice (111,456 triangles, above the peel's threshold) with 100 holes
 /// of 30 faces.
@@ -22,22 +20,7 @@ fn scan(seed: u64) -> Option<Soup> {
 /// Every island keeps the rule, the seams reported are those of the islands, and the bulk of
 /// the scan is one island mapped by `method` itself, without a split.
 fn check(s: &Soup, method: &str, r: &Unwrapped) {
-    let m = metrics::measure(&s.positions, &s.corner_verts, &s.face_sizes, &r.uv, None).unwrap();
-    assert_eq!(m.flips, 0, "{method}");
-    assert_eq!(m.overlapping_charts, 0, "{method}: an outline crosses itself");
-    for (c, mc) in r.charts.iter().zip(&m.per_chart) {
-        let ok = matches!(c.status, ChartStatus::Solved | ChartStatus::Fallback);
-        assert!(ok, "{method}: chart {}: {:?}", c.id, c.reason);
-        assert!(mc.density.outside <= 0.05 + 1e-12, "{method}: chart {}: {:.3} outside", c.id, mc.density.outside);
-    }
-    // Each island is a disk between the seams reported, and there are as many as islands.
-    let mesh = PolyMesh::new(&s.positions, &s.corner_verts, &s.face_sizes).unwrap();
-    let charts = build_charts(&mesh, &r.new_seams, None);
-    for ch in &charts {
-        assert_eq!(ch.kind, ChartKind::Disk, "{method}: an island of {} faces is {:?}", ch.faces.len(), ch.kind);
-    }
-    assert_eq!(charts.len(), r.charts.len(), "{method}: charts between the seams reported");
-    assert_eq!(m.charts, r.charts.len(), "{method}: islands measured in UV");
+    assert_islands_keep_the_rule(s, method, r);
     // The bulk of the scan is mapped by the method asked for, in one island...
     let faces = s.face_sizes.len();
     let main = r.charts.iter().max_by_key(|c| c.faces).unwrap();
@@ -75,12 +58,7 @@ fn slim_peels_a_large_overlap_instead_of_splitting() {
     let Some(s) = scan(4) else { return };
     let options = UnwrapOptions { method: Method::Slim(Default::default()), ..Default::default() };
     let r = unwrap(&s.input(), &options).unwrap();
-    let m = metrics::measure(&s.positions, &s.corner_verts, &s.face_sizes, &r.uv, None).unwrap();
-    assert!(m.flips == 0 && m.overlapping_charts == 0);
-    for (c, mc) in r.charts.iter().zip(&m.per_chart) {
-        assert!(matches!(c.status, ChartStatus::Solved | ChartStatus::Fallback), "chart {}: {:?}", c.id, c.reason);
-        assert!(mc.density.outside <= 0.05 + 1e-12, "chart {}: {:.3} outside", c.id, mc.density.outside);
-    }
+    assert_islands_keep_the_rule(&s, "slim", &r);
     assert_eq!(r.phases.splits, 0, "{:?}", r.phases);
     assert!(r.phases.peels >= 1, "{:?}", r.phases);
     let faces = s.face_sizes.len();

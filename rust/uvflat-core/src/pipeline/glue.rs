@@ -847,28 +847,8 @@ mod tests {
     use crate::pipeline::outcome::ChartReport;
     use crate::pipeline::phases::PhaseClock;
     use crate::pipeline::rule::AtlasRule;
+    use crate::pipeline::test_mesh::grid;
     use crate::unwrap::UnwrapOptions;
-
-    /// A flat grid of `cols × rows` cells of `w × h`, two triangles each (cell `(i, j)` holds
-    /// faces `2 (j cols + i)` and the next).
-    fn grid(cols: usize, rows: usize, w: f64, h: f64) -> (Vec<[f64; 3]>, Vec<u32>, Vec<u32>) {
-        let mut positions = Vec::new();
-        for j in 0..=rows {
-            for i in 0..=cols {
-                positions.push([w * i as f64, h * j as f64, 0.0]);
-            }
-        }
-        let id = |i: usize, j: usize| (j * (cols + 1) + i) as u32;
-        let mut corners = Vec::new();
-        for j in 0..rows {
-            for i in 0..cols {
-                corners.extend([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                corners.extend([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-            }
-        }
-        let sizes = vec![3u32; corners.len() / 3];
-        (positions, corners, sizes)
-    }
 
     /// The edges between faces in `speck` and faces outside it, as sorted vertex pairs.
     fn border(corners: &[u32], speck: &[u32]) -> Vec<[u32; 2]> {

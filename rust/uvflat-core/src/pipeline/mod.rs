@@ -206,6 +206,30 @@ fn road(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], depth: us
     }
 }
 
+#[cfg(test)]
+pub(crate) mod test_mesh {
+    /// A flat grid of `cols × rows` cells of `w × h`, two triangles each (cell `(i, j)` holds
+    /// faces `2 (j cols + i)` and the next): positions, corners, face sizes.
+    pub fn grid(cols: usize, rows: usize, w: f64, h: f64) -> (Vec<[f64; 3]>, Vec<u32>, Vec<u32>) {
+        let mut positions = Vec::new();
+        for j in 0..=rows {
+            for i in 0..=cols {
+                positions.push([w * i as f64, h * j as f64, 0.0]);
+            }
+        }
+        let id = |i: usize, j: usize| (j * (cols + 1) + i) as u32;
+        let mut corners = Vec::new();
+        for j in 0..rows {
+            for i in 0..cols {
+                corners.extend([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+                corners.extend([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+        let sizes = vec![3u32; corners.len() / 3];
+        (positions, corners, sizes)
+    }
+}
+
 /// Whether any corner of `chart` is pinned.
 pub(crate) fn pinned(ctx: &Context<'_, '_>, chart: &Chart) -> bool {
     !ctx.pins.is_empty() && chart.corner_vertex.iter().any(|(c, _)| ctx.pins.contains_key(c))

@@ -527,21 +527,8 @@ mod tests {
     fn coiled_strip(cols: usize, rows: usize, turn: f64, radius: f64) -> Strip {
         let width = 0.05 * radius;
         let length = turn * radius;
-        let mut positions = Vec::new();
-        for j in 0..=rows {
-            for i in 0..=cols {
-                positions.push([length * i as f64 / cols as f64, width * j as f64 / rows as f64, 0.0]);
-            }
-        }
-        let id = |i: usize, j: usize| (j * (cols + 1) + i) as u32;
-        let mut corners = Vec::new();
-        for j in 0..rows {
-            for i in 0..cols {
-                corners.extend([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                corners.extend([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-            }
-        }
-        let sizes = vec![3u32; corners.len() / 3];
+        let (positions, corners, sizes) =
+            crate::pipeline::test_mesh::grid(cols, rows, length / cols as f64, width / rows as f64);
         // x along the circle, y inwards (counter-clockwise, so triangles keep their turn).
         // The radius shrinks by half the width over the strip, so its ends lie half on each
         // other (no edge of one lies along an edge of the other).

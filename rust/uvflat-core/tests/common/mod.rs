@@ -497,3 +497,26 @@ pub fn with_holes(s: &Soup, k: usize, size: usize, seed: u64) -> Soup {
     let faces: Vec<Vec<u32>> = (0..s.face_sizes.len()).filter(|&f| !dead[f]).map(|f| face(f).to_vec()).collect();
     soup_of(s.positions.clone(), faces, |_| true)
 }
+
+/// Every island of `r` (an unwrap of `s` with automatic seams) keeps the atlas rule, measured
+/// on the UVs (no flip, no crossing outline, at most 5% outside the density bound), and the
+/// seams reported cut `s` into exactly these islands, each a disk. `what` names the run.
+pub fn assert_islands_keep_the_rule(s: &Soup, what: &str, r: &uvflat_core::Unwrapped) {
+    use uvflat_core::charts::{build_charts, ChartKind};
+    use uvflat_core::ChartStatus;
+    let m = uvflat_core::metrics::measure(&s.positions, &s.corner_verts, &s.face_sizes, &r.uv, None).unwrap();
+    assert_eq!(m.flips, 0, "{what}");
+    assert_eq!(m.overlapping_charts, 0, "{what}: an outline crosses itself");
+    for (c, mc) in r.charts.iter().zip(&m.per_chart) {
+        let ok = matches!(c.status, ChartStatus::Solved | ChartStatus::Fallback);
+        assert!(ok, "{what}: chart {}: {:?}", c.id, c.reason);
+        assert!(mc.density.outside <= 0.05 + 1e-12, "{what}: chart {}: {:.3} outside", c.id, mc.density.outside);
+    }
+    let mesh = uvflat_core::mesh::PolyMesh::new(&s.positions, &s.corner_verts, &s.face_sizes).unwrap();
+    let charts = build_charts(&mesh, &r.new_seams, None);
+    for ch in &charts {
+        assert_eq!(ch.kind, ChartKind::Disk, "{what}: an island of {} faces is {:?}", ch.faces.len(), ch.kind);
+    }
+    assert_eq!(charts.len(), r.charts.len(), "{what}: charts between the seams reported");
+    assert_eq!(m.charts, r.charts.len(), "{what}: islands measured in UV");
+}
