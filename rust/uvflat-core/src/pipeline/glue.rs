@@ -982,6 +982,89 @@ mod tests {
         assert_eq!(list[0].seams, seams);
     }
 
+    /// `k` faces of the grid grown from `start` across shared edges, in breadth-first order.
+    fn grown(corners: &[u32], start: u32, k: usize) -> Vec<u32> {
+        let n = corners.len() as u32 / 3;
+        let sides = |f: u32| {
+            let t = &corners[3 * f as usize..3 * f as usize + 3];
+            (0..3).map(move |j| [t[j].min(t[(j + 1) % 3]), t[j].max(t[(j + 1) % 3])]).collect::<Vec<_>>()
+        };
+        let mut out = vec![start];
+        let mut at = 0;
+        while out.len() < k && at < out.len() {
+            let f = out[at];
+            at += 1;
+            for g in 0..n {
+                if out.len() < k && !out.contains(&g) && sides(g).iter().any(|e| sides(f).contains(e)) {
+                    out.push(g);
+                }
+            }
+        }
+        out.sort_unstable();
+        out
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig { cases: 64, ..Default::default() })]
+
+        /// A speck grown from the lower edge of a grid (flat or bumpy), the rest mapped by a
+        /// similarity of its plan view: whatever is glued, the faces stay partitioned, every
+        /// piece keeps the rule, the seams are exactly the pieces' borders and the count of
+        /// glued specks is what vanished; on a flat grid a glued speck lands where the rest's
+        /// map puts it.
+        #[test]
+        fn glue_keeps_the_rule_and_the_seams_of_the_pieces(
+            cols in 6usize..12,
+            rows in 4usize..8,
+            start in 0usize..6,
+            k in 1usize..12,
+            bump in proptest::prop_oneof![proptest::strategy::Just(0.0), 0.0f64..0.15],
+            turn in 0.0f64..6.2,
+            scale in 0.2f64..5.0,
+        ) {
+            let (mut positions, corners, sizes) = grid(cols, rows, 1.0, 0.8);
+            for (v, p) in positions.iter_mut().enumerate() {
+                p[2] = bump * ((v * 7919 % 13) as f64 / 13.0);
+            }
+            let mesh = PolyMesh::new(&positions, &corners, &sizes).unwrap();
+            let original = build_charts(&mesh, &[], None).pop().unwrap();
+            let speck = grown(&corners, 2 * (start % cols) as u32, k);
+            let seams = border(&corners, &speck);
+            let split = build_charts(&mesh, &seams, None);
+            proptest::prop_assume!(split.len() == 2 && split.iter().all(|c| c.kind == ChartKind::Disk));
+            let (c, s) = (turn.cos() * scale, turn.sin() * scale);
+            let map = move |p: [f64; 3]| [c * p[0] - s * p[1] + 3.0, s * p[0] + c * p[1] - 1.0];
+            let options = UnwrapOptions::default();
+            let (pins, avoid) = (HashMap::new(), vec![false; positions.len()]);
+            let ctx = context(&mesh, &options, &pins, &avoid);
+            let mut list = pieces(&mesh, &seams, &ctx.rule, map, |p| [p[0] + 50.0, p[1]]);
+            proptest::prop_assume!(list.iter().all(|p| ctx.rule.broken(&p.report).is_none()));
+            apply(&ctx, &original, &mut list);
+            // Faces partitioned, every piece keeps the rule.
+            let mut faces: Vec<u32> = list.iter().flat_map(|p| p.chart.as_ref().unwrap().faces.clone()).collect();
+            faces.sort_unstable();
+            proptest::prop_assert_eq!(faces, (0..sizes.len() as u32).collect::<Vec<u32>>());
+            for p in &list {
+                proptest::prop_assert!(p.report.status.mapped() && ctx.rule.broken(&p.report).is_none(), "{:?}", p.report);
+            }
+            proptest::prop_assert_eq!(ctx.clock.get().glued, 2 - list.len());
+            // The seams cut the grid into exactly the pieces.
+            let all: Vec<[u32; 2]> = list.iter().flat_map(|p| p.seams.clone()).collect();
+            let mut cut: Vec<Vec<u32>> = build_charts(&mesh, &all, None).into_iter().map(|c| c.faces).collect();
+            let mut own: Vec<Vec<u32>> = list.iter().map(|p| p.chart.as_ref().unwrap().faces.clone()).collect();
+            cut.sort();
+            own.sort();
+            proptest::prop_assert_eq!(cut, own);
+            if list.len() == 1 && bump == 0.0 {
+                let p = &list[0];
+                let (chart, uv) = (p.chart.as_ref().unwrap(), p.uv.as_ref().unwrap());
+                for (v, q) in chart.positions.iter().enumerate() {
+                    proptest::prop_assert!(dist(uv[v], map(*q)) < 1e-9 * scale.max(1.0), "{:?} vs {:?}", uv[v], map(*q));
+                }
+            }
+        }
+    }
+
     #[test]
     fn segments_meet_when_they_cross_or_touch() {
         let (a, b) = ([0.0, 0.0], [1.0, 0.0]);
