@@ -1045,7 +1045,8 @@ mod tests {
             faces.sort_unstable();
             proptest::prop_assert_eq!(faces, (0..sizes.len() as u32).collect::<Vec<u32>>());
             for p in &list {
-                proptest::prop_assert!(p.report.status.mapped() && ctx.rule.broken(&p.report).is_none(), "{:?}", p.report);
+                let keeps = p.report.status.mapped() && ctx.rule.broken(&p.report).is_none();
+                proptest::prop_assert!(keeps, "{:?}", p.report);
             }
             proptest::prop_assert_eq!(ctx.clock.get().glued, 2 - list.len());
             // The seams cut the grid into exactly the pieces.
@@ -1059,7 +1060,8 @@ mod tests {
                 let p = &list[0];
                 let (chart, uv) = (p.chart.as_ref().unwrap(), p.uv.as_ref().unwrap());
                 for (v, q) in chart.positions.iter().enumerate() {
-                    proptest::prop_assert!(dist(uv[v], map(*q)) < 1e-9 * scale.max(1.0), "{:?} vs {:?}", uv[v], map(*q));
+                    let off = dist(uv[v], map(*q));
+                    proptest::prop_assert!(off < 1e-9 * scale.max(1.0), "{:?} vs {:?}", uv[v], map(*q));
                 }
             }
         }
