@@ -23,7 +23,7 @@
 //! - every triangle of the face (both splits of a quad) keeps its turn and has a texel density
 //!   within `[1/s, s]` of the island's own (`s`: Max Stretch);
 //! - the outline stays simple: the face's new sides touch no side of the island's outline
-//!   (found on a grid), and at both ends of the run the face fits in the island's open angle.
+//!   (found on a grid; the segment test of the rule's own measure), and at both ends of the run the face fits in the island's open angle.
 //!
 //! A face that fits nowhere is tried again once more of its speck is laid. A speck is glued
 //! when every face of it is laid (on one island or several); otherwise what was laid for it is
@@ -43,9 +43,10 @@ use std::collections::{HashMap, HashSet};
 
 use super::outcome::{ChartStatus, Problem};
 use super::solve::measure;
-use super::{Context, Piece};
+use super::{outline_pairs, Context, Piece};
 use crate::charts::{build_charts_with, Chart, ChartKind};
 use crate::geometry::{cross, cross2, dot, newell_normal, norm, sub};
+use crate::metrics::segments_intersect;
 
 /// Pieces of at most this many faces are specks, laid on their neighbours when they fit.
 pub const SPECK_FACES: usize = 32;
@@ -227,7 +228,7 @@ impl Island {
                 if self.next.get(&from) != Some(&to) || shared(from) || shared(to) || on_run(from, to) {
                     continue;
                 }
-                if seen.insert((from, to)) && segments_meet(a, b, self.uv[from as usize], self.uv[to as usize]) {
+                if seen.insert((from, to)) && segments_intersect(a, b, self.uv[from as usize], self.uv[to as usize]) {
                     return true;
                 }
             }
@@ -713,18 +714,6 @@ impl Done {
     }
 }
 
-/// The mesh vertex pairs (sorted) of every side of `chart`'s outline, slits included.
-fn outline_pairs(chart: &Chart) -> Vec<[u32; 2]> {
-    let mut out = Vec::new();
-    for l in &chart.boundary_loops {
-        for i in 0..l.len() {
-            let (a, b) = (chart.mesh_vertex[l[i] as usize], chart.mesh_vertex[l[(i + 1) % l.len()] as usize]);
-            out.push([a.min(b), a.max(b)]);
-        }
-    }
-    out
-}
-
 fn piece_chart<'x>(p: &'x Piece, original: &'x Chart) -> &'x Chart {
     p.chart.as_ref().unwrap_or(original)
 }
@@ -752,26 +741,6 @@ fn ccw_angle(a: [f64; 2], b: [f64; 2]) -> f64 {
     } else {
         t
     }
-}
-
-/// Whether segments `a`–`b` and `c`–`d` meet or come within a hair of each other
-/// (touching counts).
-fn segments_meet(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> bool {
-    let scale = dist(a, b).max(dist(c, d));
-    let hair = 1e-9 * scale;
-    if a[0].min(b[0]) > c[0].max(d[0]) + hair
-        || c[0].min(d[0]) > a[0].max(b[0]) + hair
-        || a[1].min(b[1]) > c[1].max(d[1]) + hair
-        || c[1].min(d[1]) > a[1].max(b[1]) + hair
-    {
-        return false;
-    }
-    let eps = hair * scale;
-    let orient = |p: [f64; 2], q: [f64; 2], r: [f64; 2]| cross2(diff(q, p), diff(r, p));
-    let (d1, d2) = (orient(c, d, a), orient(c, d, b));
-    let (d3, d4) = (orient(a, b, c), orient(a, b, d));
-    let apart = |x: f64, y: f64| (x > eps && y > eps) || (x < -eps && y < -eps);
-    !(apart(d1, d2) || apart(d3, d4))
 }
 
 /// A polygon's corners projected on its Newell plane, counter-clockwise as the face turns;
@@ -1068,13 +1037,14 @@ mod tests {
     }
 
     #[test]
-    fn segments_meet_when_they_cross_or_touch() {
+    fn outline_sides_meet_when_they_cross_or_touch() {
+        // (the rule's own test, `metrics::segments_intersect`: touching counts)
         let (a, b) = ([0.0, 0.0], [1.0, 0.0]);
-        assert!(segments_meet(a, b, [0.5, -1.0], [0.5, 1.0]));
-        assert!(segments_meet(a, b, [0.5, 0.0], [0.5, 1.0]), "touching at a point");
-        assert!(segments_meet(a, b, [0.5, 0.0], [2.0, 0.0]), "overlapping along a line");
-        assert!(!segments_meet(a, b, [0.5, 1e-6], [0.5, 1.0]));
-        assert!(!segments_meet(a, b, [1.5, -1.0], [1.5, 1.0]));
+        assert!(segments_intersect(a, b, [0.5, -1.0], [0.5, 1.0]));
+        assert!(segments_intersect(a, b, [0.5, 0.0], [0.5, 1.0]), "touching at a point");
+        assert!(segments_intersect(a, b, [0.5, 0.0], [2.0, 0.0]), "overlapping along a line");
+        assert!(!segments_intersect(a, b, [0.5, 1e-6], [0.5, 1.0]));
+        assert!(!segments_intersect(a, b, [1.5, -1.0], [1.5, 1.0]));
     }
 
     #[test]

@@ -230,6 +230,18 @@ pub(crate) mod test_mesh {
     }
 }
 
+/// The mesh vertex pairs (sorted) of every side of `chart`'s outline, slits included.
+pub(crate) fn outline_pairs(chart: &Chart) -> Vec<[u32; 2]> {
+    let mut out = Vec::new();
+    for l in &chart.boundary_loops {
+        for i in 0..l.len() {
+            let (a, b) = (chart.mesh_vertex[l[i] as usize], chart.mesh_vertex[l[(i + 1) % l.len()] as usize]);
+            out.push([a.min(b), a.max(b)]);
+        }
+    }
+    out
+}
+
 /// Whether any corner of `chart` is pinned.
 pub(crate) fn pinned(ctx: &Context<'_, '_>, chart: &Chart) -> bool {
     !ctx.pins.is_empty() && chart.corner_vertex.iter().any(|(c, _)| ctx.pins.contains_key(c))

@@ -115,12 +115,7 @@ fn peel(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], piece: &P
     let vertex_faces = vertex_faces(&polygons, chart.positions.len());
     // The piece's own seams: every outline edge (slits included, whose two sides are both in
     // the piece).
-    let mut outline: Vec<[u32; 2]> = Vec::new();
-    for l in &chart.boundary_loops {
-        for i in 0..l.len() {
-            outline.push(mesh_pair(chart, l[i], l[(i + 1) % l.len()]));
-        }
-    }
+    let outline = super::outline_pairs(chart);
     let mut mask = vec![false; ctx.mesh.n_faces()];
     // Chart face of every mesh face of the piece, and where its corners start.
     let mut face_at = vec![u32::MAX; ctx.mesh.n_faces()];
