@@ -23,7 +23,8 @@
 //! - every triangle of the face (both splits of a quad) keeps its turn and has a texel density
 //!   within `[1/s, s]` of the island's own (`s`: Max Stretch);
 //! - the outline stays simple: the face's new sides touch no side of the island's outline
-//!   (found on a grid; the segment test of the rule's own measure), and at both ends of the run the face fits in the island's open angle.
+//!   (found on a grid; the segment test of the rule's own measure), and at both ends of
+//!   the run the face fits in the island's open angle.
 //!
 //! A face that fits nowhere is tried again once more of its speck is laid. A speck is glued
 //! when every face of it is laid (on one island or several); otherwise what was laid for it is
