@@ -3,7 +3,7 @@
 on the UVs.
 
     .venv/bin/python blender_scripts/robustness.py [--methods abf,slim,lscm] \
-        [--meshes bunny.off,cow.off] [--variants as_is,holes,quads,ngons,parts] [--out rob.md]
+        [--meshes bunny.off,cow.off] [--variants as_is,holes,quads,ngons,collapsed,parts] [--out rob.md]
 
 Needs no Blender. Each shared mesh is unwrapped as it is and as variants that stand for what
 users bring (every variant deterministic, from a fixed seed):
@@ -15,6 +15,9 @@ users bring (every variant deterministic, from a fixed seed):
   conversion: non-planar quads, vertices shared by only two faces);
 - ``ngons``: 30% of the vertices of valence 5 to 8, in random order, dissolved (their fan of
   triangles becomes one n-gon);
+- ``collapsed``: in 1% of the triangles, in random order, one corner moved onto another, as a
+  careless decimation or a scan's reconstruction leaves them: triangles without area, and the
+  moved vertex's other triangles folded over its new neighbours;
 - ``parts``: all the chosen meshes side by side in one mesh.
 
 Every run is ``uvflat.unwrap`` with automatic seams and the defaults; the rule is measured on
@@ -45,7 +48,7 @@ from meshio_util import MESH_DIR, read_obj, read_off  # noqa: E402
 METHODS = ("abf", "slim", "lscm", "mips", "scaffold", "arap", "spectral")
 MESHES = ("bunny.off", "cow.off", "decimated-max.obj", "fertility.off", "3holes.off",
           "camelhead.off", "lion.off", "beetle.off", "halftunnel.off", "alligator.obj")
-VARIANTS = ("as_is", "holes", "big_holes", "quads", "ngons", "parts")
+VARIANTS = ("as_is", "holes", "big_holes", "quads", "ngons", "collapsed", "parts")
 
 
 def faces_of(corner_verts, face_sizes):
@@ -139,6 +142,18 @@ def ngons(mesh, share, seed):
     return soup(positions, out)
 
 
+def collapsed(mesh, share, seed):
+    positions = np.array(mesh[0], dtype=np.float64)
+    faces = faces_of(mesh[1], mesh[2])
+    tris = [i for i, f in enumerate(faces) if len(f) == 3]
+    rng = random.Random(seed)
+    rng.shuffle(tris)
+    for i in tris[: max(1, int(len(tris) * share))]:
+        a, b = rng.sample(faces[i], 2)
+        positions[b] = positions[a]
+    return positions, np.asarray(mesh[1]), np.asarray(mesh[2])
+
+
 def side_by_side(meshes):
     positions, corners, sizes, offset, x = [], [], [], 0, 0.0
     for p, c, s in meshes:
@@ -167,6 +182,8 @@ def variants(names, chosen):
             yield f"{n} quads", quads(m, 3)
         if "ngons" in chosen and all(np.asarray(m[2]) == 3):
             yield f"{n} n-gons", ngons(m, 0.3, 7)
+        if "collapsed" in chosen:
+            yield f"{n} collapsed", collapsed(m, 0.01, 5)
     if "parts" in chosen and len(base) > 1:
         yield "all parts", side_by_side(list(base.values()))
 
@@ -208,14 +225,15 @@ def main(argv=None):
     for name, mesh in variants(a.meshes.split(","), chosen):
         for method in methods:
             r = run(name, method, mesh)
-            r["variant"] = next((v for v in ("big holes", "holes", "quads", "n-gons") if name.endswith(v)),
+            r["variant"] = next((v for v in ("big holes", "holes", "quads", "n-gons", "collapsed")
+                                 if name.endswith(v)),
                                 "parts" if name == "all parts" else "as is")
             rows.append(r)
             state = "error" if "error" in r else ("keeps the rule" if r["keeps"] else "BREAKS the rule")
             print(f"{name:28s} {method:9s} {r['seconds']:7.2f} s  {state}", flush=True)
     lines = ["| variant | method | runs | keep the rule | islands | by another method | by scaffold | invalid | failed | median s |",
              "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
-    for variant in ("as is", "holes", "big holes", "quads", "n-gons", "parts"):
+    for variant in ("as is", "holes", "big holes", "quads", "n-gons", "collapsed", "parts"):
         for method in methods:
             rs = [r for r in rows if r["variant"] == variant and r["method"] == method]
             if not rs:

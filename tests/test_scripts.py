@@ -717,7 +717,8 @@ def test_batch_symmetry_marks_mirrored_seams(tmp_path):
 
 def test_robustness_variants_are_valid_meshes_of_the_promised_kind():
     """The variants of ``blender_scripts/robustness.py`` are what its docs say: holes remove at
-    most the faces asked, quads and n-gons merge faces into polygons of distinct vertices, and
+    most the faces asked, quads and n-gons merge faces into polygons of distinct vertices,
+    collapsed leaves triangles without area, and
     every variant is a mesh uvflat accepts (deterministic: the same twice)."""
     sys.path.insert(0, str(REPO / "blender_scripts"))
     import robustness
@@ -734,7 +735,15 @@ def test_robustness_variants_are_valid_meshes_of_the_promised_kind():
     big = ngons[2][ngons[2] > 3]
     assert len(big) > 0 and big.min() >= 5 and big.max() <= 8
     assert big.sum() + (ngons[2] == 3).sum() == n  # each n-gon replaces its n triangles
-    for p, c, s in (holes, quads, ngons):
+    # Collapsed: the faces as they were, 1% of the triangles (at least) without area.
+    squashed = robustness.collapsed(mesh, 0.01, 5)
+    assert np.array_equal(squashed[1], mesh[1]) and np.array_equal(squashed[2], mesh[2])
+    t = np.asarray(mesh[1]).reshape(-1, 3)
+    q = squashed[0][t]
+    zero = (np.linalg.norm(np.cross(q[:, 1] - q[:, 0], q[:, 2] - q[:, 0]), axis=1) == 0).sum()
+    assert zero >= n // 100
+    assert np.array_equal(robustness.collapsed(mesh, 0.01, 5)[0], squashed[0])
+    for p, c, s in (holes, quads, ngons, squashed):
         starts = np.concatenate([[0], np.cumsum(s)[:-1]])
         assert all(len(set(c[a:a + k].tolist())) == k for a, k in zip(starts, s))
         assert c.max() < len(p)

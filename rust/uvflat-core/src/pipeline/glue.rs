@@ -26,6 +26,9 @@
 //!   (found on a grid; the segment test of the rule's own measure), and at both ends of
 //!   the run the face fits in the island's open angle.
 //!
+//! A face with every side on one island is laid across all but one of them (the one left
+//! stays a seam), each side in turn, when it has at most [`MAX_CLOSING_CORNERS`] corners.
+//!
 //! A face that fits nowhere is tried again once more of its speck is laid. A speck is glued
 //! when every face of it is laid (on one island or several); otherwise what was laid for it is
 //! undone. Each island that took faces is then rebuilt and measured on its render triangles;
@@ -51,6 +54,13 @@ use crate::metrics::segments_intersect;
 
 /// Pieces of at most this many faces are specks, laid on their neighbours when they fit.
 pub const SPECK_FACES: usize = 32;
+
+/// Faces of at most this many corners are tried across all but one of their sides when every
+/// side is on the island (closing a gap where the outline meets itself), each side in turn
+/// the one left: a triangle or quad closes such a gap; a cap of thousands of corners on a
+/// cylinder's end does not, and trying each of its sides costs its corners squared (1.8 s for
+/// two 5,000-gon caps).
+pub const MAX_CLOSING_CORNERS: usize = 16;
 
 /// Passes over the specks at most: each pass after the first leaves out the specks of the
 /// islands that broke the rule once rebuilt.
@@ -394,7 +404,11 @@ impl<'p, 'c, 'a, 'm> Pass<'p, 'c, 'a, 'm> {
         for (shared, k) in islands {
             // A face whose every side is on the island closes a gap where the outline meets
             // itself: it is laid across all but one of its sides (the one left is a seam).
-            let spare: Vec<Option<usize>> = if shared == n { (0..n).rev().map(Some).collect() } else { vec![None] };
+            let spare: Vec<Option<usize>> = match shared == n {
+                true if n > MAX_CLOSING_CORNERS => continue,
+                true => (0..n).rev().map(Some).collect(),
+                false => vec![None],
+            };
             for spare in spare {
                 if self.lay_on(f, k, &corners, &verts, &across, spare) {
                     return true;

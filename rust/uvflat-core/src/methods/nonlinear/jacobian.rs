@@ -145,19 +145,25 @@ impl TriangleOperators {
         TriangleOperators { grad, area, total_area }
     }
 
-    /// Rest frames from each 3D triangle in its own orthonormal frame; `area` is the 3D area,
-    /// 0 (and zero gradients) for a triangle that is degenerate in that frame.
+    /// Rest frames from each 3D triangle in its own orthonormal frame; `area` is the 3D area.
+    /// A triangle that is degenerate in that frame (collinear or coincident corners) gets
+    /// [`Self::new`]'s thin but valid shape from its clamped angles instead, so its energy
+    /// still keeps it from collapsing or flipping in the map: with zero area it would carry no
+    /// energy, and a barrier method's line search would let it flip (scaffold on a scan with
+    /// collapsed vertices folded three such triangles).
     pub fn local_frames(positions: &[[f64; 3]], triangles: &[[u32; 3]]) -> Self {
-        Self::from_parts(
-            triangles
-                .iter()
-                .map(|t| {
-                    let p = [positions[t[0] as usize], positions[t[1] as usize], positions[t[2] as usize]];
-                    let (g, a) = planar_rest(local_frame(p));
-                    (g, if a > 0.0 { triangle_area(p) } else { 0.0 })
-                })
-                .collect(),
-        )
+        let mut mean: Option<f64> = None;
+        let mut parts: Vec<([[f64; 3]; 2], f64)> = Vec::with_capacity(triangles.len());
+        for t in triangles {
+            let p = [positions[t[0] as usize], positions[t[1] as usize], positions[t[2] as usize]];
+            let (g, a) = planar_rest(local_frame(p));
+            parts.push(if a > 0.0 {
+                (g, triangle_area(p))
+            } else {
+                sines_rest(positions, t, *mean.get_or_insert_with(|| mean_edge(positions, triangles)))
+            });
+        }
+        Self::from_parts(parts)
     }
 
     /// Rest frames of 2D triangles as they are (counter-clockwise for a positive area); a
@@ -363,12 +369,18 @@ mod tests {
     }
 
     #[test]
-    fn degenerate_triangles_get_a_valid_or_an_empty_rest_shape() {
+    fn degenerate_triangles_get_a_thin_but_valid_rest_shape() {
         let p = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]];
         let ops = TriangleOperators::new(&p, &[[0, 1, 2]]);
         assert!(ops.area[0] > 0.0 && ops.grad[0].iter().flatten().all(|x| x.is_finite()));
-        let ops = TriangleOperators::local_frames(&p, &[[0, 1, 2]]);
-        assert_eq!(ops.area[0], 0.0);
+        // In their own frames too: the same thin shape, so a barrier still holds it.
+        let local = TriangleOperators::local_frames(&p, &[[0, 1, 2]]);
+        assert_eq!((local.area[0], local.grad[0]), (ops.area[0], ops.grad[0]));
+        // Two coincident corners beside an ordinary triangle: ordinary stays exact.
+        let q = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 0.0]];
+        let local = TriangleOperators::local_frames(&q, &[[0, 1, 2], [0, 3, 1]]);
+        assert!((local.area[0] - 0.5).abs() < 1e-15);
+        assert!(local.area[1] > 0.0 && local.grad[1].iter().flatten().all(|x| x.is_finite()));
         assert!(!TriangleOperators::planar_is_valid([[0.0, 0.0], [1.0, 1.0], [2.0, 2.0]]));
         let w = TriangleOperators::planar(&[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], &[[0, 1, 2]]).weighted(&[0.5]);
         assert!((w.total_area - 0.25).abs() < 1e-15);

@@ -245,7 +245,13 @@ fn run(
     // 3D shape at that scale (see the module docs).
     let (rest, scale) = rest_positions(chart, pins);
     let ops = TriangleOperators::local_frames(&rest, tris);
-    if !(ops.total_area > 0.0) {
+    // (Degenerate triangles get a thin rest shape of positive area: the chart's own area
+    // decides.)
+    let area_3d: f64 = tris
+        .iter()
+        .map(|t| crate::geometry::triangle_area([rest[t[0] as usize], rest[t[1] as usize], rest[t[2] as usize]]))
+        .sum();
+    if !(area_3d > 0.0) {
         return Err(ChartFailure("the chart has zero 3D area".into()));
     }
     let t_start = Instant::now();
