@@ -78,3 +78,26 @@ fn a_scan_with_collapsed_vertices_keeps_the_rule() {
         ],
     );
 }
+
+/// The beetle with a vertex collapsed in every 89th or 79th triangle: `abf` leaves one island
+/// of 38,656 faces whose outline crosses itself where the surface folds, and the last
+/// resort's `scaffold` stalls on it. The repair's last step peels it at any size
+/// (`pipeline/peel.rs`): the faces where the outline crosses become islands of their own.
+#[test]
+fn a_folded_island_is_peeled_at_any_size() {
+    let Some(dir) = shared_meshes() else {
+        eprintln!("skipped: ../shared/meshes is absent");
+        return;
+    };
+    for step in [89, 79] {
+        let s = collapsed(load(&dir.join("beetle.off")), step);
+        let options = UnwrapOptions { method: Method::Abf(Default::default()), ..Default::default() };
+        let r = unwrap(&s.input(), &options).unwrap();
+        assert!(s.face_sizes.len() < uvflat_core::pipeline::peel::PEEL_FROM);
+        assert!(r.phases.peels >= 1, "step {step}: {:?}", r.phases);
+        assert_islands_keep_the_rule(&s, &format!("beetle, step {step}"), &r);
+        // The peel keeps the piece's map: one island keeps almost every face.
+        let largest = r.charts.iter().map(|c| c.faces).max().unwrap_or(0);
+        assert!(largest * 10 >= 9 * s.face_sizes.len(), "step {step}: largest island {largest}");
+    }
+}

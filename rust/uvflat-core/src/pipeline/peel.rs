@@ -35,6 +35,12 @@
 //!    to the seams. Otherwise the piece is left as it was (the repair's rounds and split
 //!    follow as before).
 //!
+//! Smaller pieces are peeled too, once the repair has done all it can (every split level and
+//! the last resort) and the outline still crosses itself: on the beetle with a vertex
+//! collapsed onto a neighbour in 1% of its triangles (the surface folds over there), `abf`
+//! left one island of 38,656 faces whose outline crossed itself, and `scaffold` stalled on
+//! it; peeled, it is three islands that keep the rule.
+//!
 //! Bounded: at most `3 × RINGS.len()` rebuilds of a piece. Deterministic: overlapping pairs
 //! and sides in index order, rings and borders in face order.
 
@@ -73,8 +79,9 @@ pub fn apply(ctx: &Context<'_, '_>, original: &Chart, base_seams: &[[u32; 2]], p
     apply_from(ctx, original, base_seams, pieces, PEEL_FROM);
 }
 
-/// [`apply`] to pieces of at least `min_triangles` triangles.
-fn apply_from(
+/// [`apply`] to pieces of at least `min_triangles` triangles (0: the repair's last step, see
+/// the module docs).
+pub(super) fn apply_from(
     ctx: &Context<'_, '_>,
     original: &Chart,
     base_seams: &[[u32; 2]],

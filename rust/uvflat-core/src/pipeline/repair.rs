@@ -316,6 +316,10 @@ pub fn repair<'a>(
         // Only once every split level has had its try with the method (a half fixed by the
         // last resort would end the search for a split the method maps within the rule).
         super::last_resort::apply(ctx, chart, &mut best, "its cones and splits");
+        // A piece of any size whose outline still crosses itself (the last resort's
+        // `scaffold` stalled, as on surface folded in 3D) is peeled: its map is kept, the
+        // faces where it crosses become islands of their own.
+        super::peel::apply_from(ctx, chart, base_seams, &mut best, 0);
     }
     best
 }
