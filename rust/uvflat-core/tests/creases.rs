@@ -175,3 +175,44 @@ fn a_capped_cone_is_its_base_and_an_unrolled_side() {
     assert_eq!(r.phases.crease_cuts, 0);
     assert!(r.new_seams.iter().all(|e| e[0] != 0 && e[1] != 0), "{:?}", r.new_seams);
 }
+
+/// A gear of `teeth` teeth and height `h`, extruded from a polygon whose radius steps between
+/// 1 and 0.85 every two corners (each tooth's sides at right angles to its top): n-gon caps
+/// and one quad per side face, every side face meeting its neighbours at a crease.
+fn gear(teeth: usize, h: f64) -> Soup {
+    let n = 4 * teeth;
+    let mut positions = Vec::new();
+    for z in [0.0, h] {
+        for k in 0..n {
+            let a = std::f64::consts::TAU * k as f64 / n as f64;
+            let r = if (k / 2) % 2 == 0 { 1.0 } else { 0.85 };
+            positions.push([r * a.cos(), r * a.sin(), z]);
+        }
+    }
+    let mut corner_verts: Vec<u32> = (0..n as u32).rev().collect();
+    let mut face_sizes = vec![n as u32];
+    corner_verts.extend((0..n as u32).map(|k| k + n as u32));
+    face_sizes.push(n as u32);
+    for k in 0..n as u32 {
+        let next = (k + 1) % n as u32;
+        corner_verts.extend([k, next, next + n as u32, k + n as u32]);
+        face_sizes.push(4);
+    }
+    Soup { positions, corner_verts, face_sizes }
+}
+
+/// The gear's side faces meet at creases along its axis, each joining two faces: its side is
+/// one band, unrolled as one strip (cut once, along the axis), beside its two caps, instead
+/// of an island per face; the rims stay cut.
+#[test]
+fn an_extrusion_s_side_is_one_strip_beside_its_caps() {
+    let (teeth, n) = (12, 48);
+    let s = gear(teeth, 0.3);
+    let rim = rims(n, 1);
+    laid_flat_by_every_method(&s, 3, |name, seams| {
+        assert!(rim.is_subset(seams), "{name}: the rims are cut");
+        let side: Vec<_> = seams.difference(&rim).collect();
+        assert_eq!(side.len(), 1, "{name}: one cut down the side: {side:?}");
+        assert_eq!(side[0][0] as usize % n, side[0][1] as usize % n, "{name}: along the axis");
+    });
+}

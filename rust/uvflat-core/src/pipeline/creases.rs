@@ -30,6 +30,10 @@
 //!   apexes are cut to their region's outline by the shortest path, so a cone's side is cut
 //!   from its tip to its rim and unrolls into a sector.
 //!
+//! The side faces of an extrusion (a gear's teeth, a box around a bore) meet at creases
+//! too, all along its axis; those creases are left uncut where the side stays a strip or a
+//! ring that unrolls ([`join_developable`]), so the side is one island, not one per face.
+//!
 //! The regions then take the pipeline's road at the same split depth (a region that is a
 //! disk is solved as it is, a rolled side or a face with holes is cut first, and every piece
 //! is held to the atlas rule and repaired as any other). The creases are new seams, reported
@@ -92,12 +96,13 @@ pub fn crease_seams(ctx: &Context<'_, '_>, chart: &Chart) -> Option<Vec<[u32; 2]
         return None;
     }
     let graph = ChartGraph::new(ctx.mesh, chart);
-    let crease: Vec<bool> = (0..graph.edges.len())
+    let mut crease: Vec<bool> = (0..graph.edges.len())
         .map(|e| graph.edge_polygons[e][1] != u32::MAX && graph.dihedral[e] >= CREASE_ANGLE)
         .collect();
     if !crease.iter().any(|&c| c) {
         return None;
     }
+    join_developable(chart, &graph, &mut crease, &|v| inner(v), &|v| defect(v).abs() <= CURVED_DEFECT);
     let mut on_crease = vec![false; n];
     for (e, &c) in crease.iter().enumerate() {
         if c {
@@ -167,6 +172,204 @@ pub fn crease_seams(ctx: &Context<'_, '_>, chart: &Chart) -> Option<Vec<[u32; 2]
     seams.dedup();
     Some(seams)
 }
+
+/// Leave uncut the creases that join the side faces of an extrusion into one band, so its
+/// side unrolls as one strip instead of one island per face (a gear of 24 teeth: 98 islands,
+/// now 3: the band and its two caps).
+///
+/// Only creases along the extrusion's axis are candidates: the direction most creases share
+/// (ties to the least direction), since its side edges share the axis while its rims turn.
+/// The unit is a chain: crease edges joined at flat inner vertices (`flat(v)`) with no other
+/// crease (points along one straight crease line), taken from its lowest edge, in passes
+/// until none more is left uncut. A chain is left uncut when:
+/// * each of its two ends is on the chart's outline, keeps at least two other creases (it
+///   stays on a cut running through it, as a rim does), or keeps none and is flat (it becomes
+///   an inner vertex of a region, which must unroll); an end that would keep one crease would
+///   be the tip of a slit;
+/// * the regions on both sides are planar with their normal across the chain, or bands whose
+///   axis is the chain's direction (a cap, whose normal is the axis, never joins);
+/// * each of those regions takes part in at most two joins in all, so the joined regions make
+///   strips and rings, which unroll side by side: a plate joined to its edge and to the wall
+///   of a notch behind it, and to its underside through both, would unroll onto itself.
+fn join_developable(
+    chart: &Chart,
+    graph: &ChartGraph,
+    crease: &mut [bool],
+    inner: &dyn Fn(usize) -> bool,
+    flat: &dyn Fn(usize) -> bool,
+) {
+    use crate::geometry::{dot, newell_normal, norm, sub};
+    let unit = |v: [f64; 3]| {
+        let l = norm(v);
+        if l > 0.0 { [v[0] / l, v[1] / l, v[2] / l] } else { [0.0; 3] }
+    };
+    let normals: Vec<[f64; 3]> = graph
+        .polygons
+        .iter()
+        .map(|p| unit(newell_normal(p.len(), |i| chart.positions[p[i] as usize])))
+        .collect();
+    // The regions between the creases and the shape of each: all its faces in one plane, all
+    // their normals across one axis (a band: a prism's or cylinder's side), or neither.
+    let mut regions = crate::charts::UnionFind::new(graph.polygons.len());
+    for (e, p) in graph.edge_polygons.iter().enumerate() {
+        if !crease[e] && p[1] != u32::MAX {
+            regions.union(p[0], p[1]);
+        }
+    }
+    let mut members: std::collections::BTreeMap<u32, Vec<usize>> = Default::default();
+    for f in 0..graph.polygons.len() {
+        members.entry(regions.find(f as u32)).or_default().push(f);
+    }
+    let mut shape: std::collections::HashMap<u32, Shape> = Default::default();
+    for (&root, faces) in &members {
+        let n0 = normals[faces[0]];
+        let other = faces.iter().map(|&f| normals[f]).find(|n| norm(crate::geometry::cross(n0, *n)) > AXIS_TOLERANCE);
+        let s = match other {
+            None => Shape::Planar(n0),
+            Some(n1) => {
+                let axis = unit(crate::geometry::cross(n0, n1));
+                if faces.iter().all(|&f| dot(normals[f], axis).abs() <= AXIS_TOLERANCE) {
+                    Shape::Band(axis)
+                } else {
+                    Shape::Other
+                }
+            }
+        };
+        shape.insert(root, s);
+    }
+    let first_region: Vec<u32> = (0..graph.polygons.len() as u32).map(|p| regions.find(p)).collect();
+    let mut joins: std::collections::HashMap<u32, usize> = members.keys().map(|&r| (r, 0)).collect();
+    // Whether a region of shape `s` may join across a crease along unit direction `d`.
+    let across = |s: &Shape, d: [f64; 3]| match *s {
+        Shape::Planar(n) => dot(n, d).abs() <= AXIS_TOLERANCE,
+        Shape::Band(a) => dot(a, d).abs() >= 1.0 - AXIS_TOLERANCE,
+        Shape::Other => false,
+    };
+    let mut creases_at = vec![0u32; graph.n_vertices];
+    for (e, &c) in crease.iter().enumerate() {
+        if c {
+            for v in graph.edges[e] {
+                creases_at[v as usize] += 1;
+            }
+        }
+    }
+    // A vertex a chain runs through: inner, flat, on exactly two creases.
+    let through = |v: usize, at: &[u32]| inner(v) && flat(v) && at[v] == 2;
+    // The creases' directions (an extrusion's side edges share its axis; its rims turn).
+    let direction = |e: usize| {
+        let [a, b] = graph.edges[e];
+        let d = unit(sub(chart.positions[b as usize], chart.positions[a as usize]));
+        let k = (0..3).find(|&k| d[k].abs() > 1e-9).unwrap_or(0);
+        let d = if d[k] < 0.0 { [-d[0], -d[1], -d[2]] } else { d };
+        d.map(|x| (x / AXIS_TOLERANCE).round() as i64)
+    };
+    let mut parallel: std::collections::HashMap<[i64; 3], usize> = Default::default();
+    for e in (0..crease.len()).filter(|&e| crease[e]) {
+        *parallel.entry(direction(e)).or_default() += 1;
+    }
+    // Only the creases along the direction most of them share (the extrusion's axis; ties to
+    // the least direction): joining across creases of several directions folds regions into
+    // shapes whose unrolling can lie on itself (a plate joined to its edge and its underside).
+    let Some(axis) = parallel.iter().max_by(|a, b| a.1.cmp(b.1).then(b.0.cmp(a.0))).map(|x| *x.0) else { return };
+    let order: Vec<usize> = (0..crease.len()).filter(|&e| crease[e] && direction(e) == axis).collect();
+    loop {
+        let mut changed = false;
+        for &e0 in &order {
+            if !crease[e0] {
+                continue;
+            }
+            // The chain through e0: walk both ways through vertices the chain runs through.
+            let mut chain = vec![e0 as u32];
+            let mut ends = [0u32; 2];
+            for (side, &start) in graph.edges[e0].iter().enumerate() {
+                let (mut v, mut from) = (start, e0 as u32);
+                while through(v as usize, &creases_at) && chain.len() <= crease.len() {
+                    let range = graph.adj_start[v as usize]..graph.adj_start[v as usize + 1];
+                    let Some(&(w, e)) = graph.adj[range].iter().find(|&&(_, e)| e != from && crease[e as usize]) else {
+                        break;
+                    };
+                    if e as usize == e0 {
+                        break; // a closed loop of straight crease points
+                    }
+                    chain.push(e);
+                    (v, from) = (w, e);
+                }
+                ends[side] = v;
+            }
+            chain.sort_unstable();
+            chain.dedup();
+            if chain[0] as usize != e0 {
+                continue; // taken from its lowest edge
+            }
+            let ok = |v: u32, left: u32| !inner(v as usize) || left >= 2 || (left == 0 && flat(v as usize));
+            let keeps = if ends[0] == ends[1] {
+                ok(ends[0], creases_at[ends[0] as usize].saturating_sub(2))
+            } else {
+                ends.iter().all(|&v| ok(v, creases_at[v as usize] - 1))
+            };
+            if !keeps {
+                continue;
+            }
+            // The regions on both sides stay a plane or a band along the chain.
+            let [a, b] = graph.edges[e0];
+            let d = unit(sub(chart.positions[b as usize], chart.positions[a as usize]));
+            let sides: Vec<u32> = chain
+                .iter()
+                .flat_map(|&e| graph.edge_polygons[e as usize])
+                .filter(|&p| p != u32::MAX)
+                .map(|p| regions.find(p))
+                .collect();
+            if !sides.iter().all(|r| across(&shape[r], d)) {
+                continue;
+            }
+            // Each region between the creases takes part in at most two joins: strips and
+            // rings, which unroll side by side.
+            let mut initial: Vec<u32> = chain
+                .iter()
+                .flat_map(|&e| graph.edge_polygons[e as usize])
+                .filter(|&p| p != u32::MAX)
+                .map(|p| first_region[p as usize])
+                .collect();
+            initial.sort_unstable();
+            initial.dedup();
+            if initial.iter().any(|r| joins[r] >= 2) {
+                continue;
+            }
+            for r in &initial {
+                *joins.get_mut(r).expect("every region counted") += 1;
+            }
+            changed = true;
+            for &e in &chain {
+                crease[e as usize] = false;
+                for v in graph.edges[e as usize] {
+                    creases_at[v as usize] -= 1;
+                }
+            }
+            let first = sides[0];
+            for &r in &sides[1..] {
+                regions.union(first, r);
+            }
+            shape.insert(regions.find(first), Shape::Band(d));
+        }
+        if !changed {
+            break;
+        }
+    }
+}
+
+/// The shape of a region between creases ([`join_developable`]).
+enum Shape {
+    /// Every face in one plane, of this unit normal.
+    Planar([f64; 3]),
+    /// Every face's normal across this unit axis: the side of a prism or a cylinder.
+    Band([f64; 3]),
+    /// Neither.
+    Other,
+}
+
+/// Largest `|cos|` between a face's normal and a band's axis (or a crease along it) for the
+/// face to count as parallel to the axis, and smallest cross product for two normals to differ.
+const AXIS_TOLERANCE: f64 = 1e-3;
 
 /// The regions of `chart` cut along `creases` ([`crease_seams`]), each taken through the
 /// pipeline's road at split depth `depth`; the creases go with the first region's piece.
