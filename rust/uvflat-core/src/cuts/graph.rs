@@ -5,7 +5,7 @@
 //! vertices, edges are polygon edges, and the dual graph's nodes are the polygons.
 
 use crate::charts::Chart;
-use crate::geometry::{cross, dot, norm, sub};
+use crate::geometry::{cross, dot, newell_normal, norm, sub, unit};
 use crate::mesh::PolyMesh;
 
 /// Polygon edge graph of a chart, with per-edge cut costs.
@@ -45,23 +45,20 @@ pub fn face_polygons(mesh: &PolyMesh<'_>, chart: &Chart) -> Vec<Vec<u32>> {
     polygons
 }
 
+/// Unit normal of every polygon (over chart vertices) of `chart`: Newell's normal, robust for
+/// non-planar polygons; zero for a polygon without area.
+pub fn polygon_normals(chart: &Chart, polygons: &[Vec<u32>]) -> Vec<[f64; 3]> {
+    polygons
+        .iter()
+        .map(|poly| unit(newell_normal(poly.len(), |i| chart.positions[poly[i] as usize])))
+        .collect()
+}
+
 impl ChartGraph {
     /// Build the graph of `chart`, whose faces are polygons of `mesh`.
     pub fn new(mesh: &PolyMesh<'_>, chart: &Chart) -> ChartGraph {
         let polygons = face_polygons(mesh, chart);
-        let normals: Vec<[f64; 3]> = polygons
-            .iter()
-            .map(|poly| {
-                // Newell's normal: robust for non-planar polygons.
-                let n = crate::geometry::newell_normal(poly.len(), |i| chart.positions[poly[i] as usize]);
-                let l = norm(n);
-                if l > 0.0 {
-                    [n[0] / l, n[1] / l, n[2] / l]
-                } else {
-                    [0.0; 3]
-                }
-            })
-            .collect();
+        let normals = polygon_normals(chart, &polygons);
         // Every polygon side keyed by its vertex pair, sorted (then by polygon, so the first
         // polygon of an edge is the one met first): edge ids in vertex-pair order.
         let mut sides: Vec<(u64, u32)> = Vec::with_capacity(polygons.iter().map(Vec::len).sum());

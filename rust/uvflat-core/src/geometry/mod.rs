@@ -26,6 +26,16 @@ pub fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
 pub fn norm(a: [f64; 3]) -> f64 {
     dot(a, a).sqrt()
 }
+/// `a` scaled to unit length; zero for a zero (or non-finite-length) vector.
+#[inline]
+pub fn unit(a: [f64; 3]) -> [f64; 3] {
+    let l = norm(a);
+    if l > 0.0 && l.is_finite() {
+        [a[0] / l, a[1] / l, a[2] / l]
+    } else {
+        [0.0; 3]
+    }
+}
 /// Newell's normal of the polygon `point(0), …, point(n − 1)`: twice its vector area, robust
 /// for non-planar polygons (its length is twice the area of a planar one).
 pub fn newell_normal(n: usize, point: impl Fn(usize) -> [f64; 3]) -> [f64; 3] {

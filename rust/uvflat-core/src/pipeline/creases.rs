@@ -198,16 +198,8 @@ fn join_developable(
     inner: &dyn Fn(usize) -> bool,
     flat: &dyn Fn(usize) -> bool,
 ) {
-    use crate::geometry::{dot, newell_normal, norm, sub};
-    let unit = |v: [f64; 3]| {
-        let l = norm(v);
-        if l > 0.0 { [v[0] / l, v[1] / l, v[2] / l] } else { [0.0; 3] }
-    };
-    let normals: Vec<[f64; 3]> = graph
-        .polygons
-        .iter()
-        .map(|p| unit(newell_normal(p.len(), |i| chart.positions[p[i] as usize])))
-        .collect();
+    use crate::geometry::{cross, dot, norm, sub, unit};
+    let normals = crate::cuts::graph::polygon_normals(chart, &graph.polygons);
     // The regions between the creases and the shape of each: all its faces in one plane, all
     // their normals across one axis (a band: a prism's or cylinder's side), or neither.
     let mut regions = crate::charts::UnionFind::new(graph.polygons.len());
@@ -216,29 +208,34 @@ fn join_developable(
             regions.union(p[0], p[1]);
         }
     }
-    let mut members: std::collections::BTreeMap<u32, Vec<usize>> = Default::default();
-    for f in 0..graph.polygons.len() {
-        members.entry(regions.find(f as u32)).or_default().push(f);
+    let n_polygons = graph.polygons.len();
+    // Region (its root polygon) of every polygon before any join, and its faces.
+    let first_region: Vec<u32> = (0..n_polygons as u32).map(|p| regions.find(p)).collect();
+    let mut members: Vec<Vec<usize>> = vec![Vec::new(); n_polygons];
+    for (f, &r) in first_region.iter().enumerate() {
+        members[r as usize].push(f);
     }
-    let mut shape: std::collections::HashMap<u32, Shape> = Default::default();
-    for (&root, faces) in &members {
-        let n0 = normals[faces[0]];
-        let other = faces.iter().map(|&f| normals[f]).find(|n| norm(crate::geometry::cross(n0, *n)) > AXIS_TOLERANCE);
-        let s = match other {
-            None => Shape::Planar(n0),
-            Some(n1) => {
-                let axis = unit(crate::geometry::cross(n0, n1));
-                if faces.iter().all(|&f| dot(normals[f], axis).abs() <= AXIS_TOLERANCE) {
-                    Shape::Band(axis)
-                } else {
-                    Shape::Other
+    // Shape of every region, by its current root polygon.
+    let mut shape: Vec<Shape> = members
+        .iter()
+        .map(|faces| {
+            let Some(&f0) = faces.first() else { return Shape::Other };
+            let n0 = normals[f0];
+            match faces.iter().map(|&f| normals[f]).find(|n| norm(cross(n0, *n)) > AXIS_TOLERANCE) {
+                None => Shape::Planar(n0),
+                Some(n1) => {
+                    let axis = unit(cross(n0, n1));
+                    if faces.iter().all(|&f| dot(normals[f], axis).abs() <= AXIS_TOLERANCE) {
+                        Shape::Band(axis)
+                    } else {
+                        Shape::Other
+                    }
                 }
             }
-        };
-        shape.insert(root, s);
-    }
-    let first_region: Vec<u32> = (0..graph.polygons.len() as u32).map(|p| regions.find(p)).collect();
-    let mut joins: std::collections::HashMap<u32, usize> = members.keys().map(|&r| (r, 0)).collect();
+        })
+        .collect();
+    // Joins each region before any join takes part in.
+    let mut joins = vec![0usize; n_polygons];
     // Whether a region of shape `s` may join across a crease along unit direction `d`.
     let across = |s: &Shape, d: [f64; 3]| match *s {
         Shape::Planar(n) => dot(n, d).abs() <= AXIS_TOLERANCE,
@@ -319,7 +316,7 @@ fn join_developable(
                 .filter(|&p| p != u32::MAX)
                 .map(|p| regions.find(p))
                 .collect();
-            if !sides.iter().all(|r| across(&shape[r], d)) {
+            if !sides.iter().all(|&r| across(&shape[r as usize], d)) {
                 continue;
             }
             // Each region between the creases takes part in at most two joins: strips and
@@ -332,11 +329,11 @@ fn join_developable(
                 .collect();
             initial.sort_unstable();
             initial.dedup();
-            if initial.iter().any(|r| joins[r] >= 2) {
+            if initial.iter().any(|&r| joins[r as usize] >= 2) {
                 continue;
             }
-            for r in &initial {
-                *joins.get_mut(r).expect("every region counted") += 1;
+            for &r in &initial {
+                joins[r as usize] += 1;
             }
             changed = true;
             for &e in &chain {
@@ -349,7 +346,8 @@ fn join_developable(
             for &r in &sides[1..] {
                 regions.union(first, r);
             }
-            shape.insert(regions.find(first), Shape::Band(d));
+            let root = regions.find(first) as usize;
+            shape[root] = Shape::Band(d);
         }
         if !changed {
             break;

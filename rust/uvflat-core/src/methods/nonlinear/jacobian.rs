@@ -13,8 +13,8 @@
 //! * [`TriangleOperators::new`]: from the clamped corner angles and the longest 3D edge (law
 //!   of sines; ARAP, SLIM) — exact for ordinary triangles, thin but valid for degenerate ones;
 //! * [`TriangleOperators::local_frames`]: the 3D triangle in its own orthonormal frame
-//!   ([`crate::geometry::local_frame`]; MIPS, scaffold) — a degenerate triangle gets zero area
-//!   and zero gradients, so it carries no energy;
+//!   ([`crate::geometry::local_frame`]; MIPS, scaffold) — exact for ordinary triangles; a
+//!   degenerate one gets the thin shape of [`TriangleOperators::new`], so a barrier holds it;
 //! * [`TriangleOperators::planar`]: 2D points as they are (the scaffold's triangles, whose rest
 //!   shape is their current shape).
 //!
