@@ -41,6 +41,7 @@ SHAPES = (
     "thick_shell",     # Suzanne subdivided once and solidified: an inner shell that folds
     "twisted_torus",   # a torus twisted by a simple deform
     "long_cylinder",   # 8 sides, 100 times longer than wide
+    "gear",            # a 96-gon of 24 teeth solidified: its side faces meet at 90° creases
 )
 
 
@@ -147,6 +148,14 @@ def _build(name):
         m.deform_method, m.angle = "TWIST", 3.0
     elif name == "long_cylinder":
         ops.mesh.primitive_cylinder_add(vertices=8, depth=20, radius=0.2)
+    elif name == "gear":
+        ops.mesh.primitive_circle_add(vertices=96, fill_type="NGON")
+        me = added().data
+        a = 2 * np.pi * np.arange(96) / 96
+        r = np.where((np.arange(96) // 2) % 2 == 0, 1.0, 0.85)
+        me.vertices.foreach_set("co", np.stack([r * np.cos(a), r * np.sin(a), 0 * a], 1).ravel())
+        m = added().modifiers.new("solidify", "SOLIDIFY")
+        m.thickness = 0.3
     else:
         raise ValueError(f"unknown shape {name!r}; known: {', '.join(SHAPES)}")
     return [added()]

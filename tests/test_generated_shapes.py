@@ -60,6 +60,7 @@ def euler_and_parts(cv, fs):
     ("array_cubes", 20, 10, True),   # ten separate cubes
     ("grid_open", 1, 1, False),      # a disk
     ("screw", 0, 1, False),          # a tube open at both ends
+    ("gear", 2, 1, True),            # a solid extrusion: a sphere's topology
 ])
 def test_the_shapes_are_what_they_stand_for(built, name, euler, parts, closed):
     pos, cv, fs, tri = built[name]
@@ -101,7 +102,7 @@ def test_every_island_keeps_the_atlas_rule(built, name, method):
 
 
 @pytest.mark.parametrize("name", ["cylinder_ngon", "cylinder_fan", "cad_hole", "cad_bracket", "long_cylinder",
-                                  "cone"])
+                                  "cone", "gear"])
 def test_hard_surfaces_are_cut_along_their_creases(built, name):
     """Flat or rolled everywhere but along their creases (and at a cone's tip, cut to the rim),
     with more curved corners than cones: cut along the creases, every piece laid flat without
@@ -117,6 +118,18 @@ def test_hard_surfaces_are_cut_along_their_creases(built, name):
             assert c.conformal < 1.001 and c.area < 1.001, (c.conformal, c.area)
         seams[method] = sorted(map(tuple, np.sort(np.asarray(r.new_seams), axis=1).tolist()))
     assert seams["abf"] == seams["slim"] == seams["lscm"]
+
+
+@pytest.mark.parametrize("method", ["abf", "slim", "lscm"])
+def test_an_extrusion_s_side_is_one_strip_on_blender_s_triangles(built, method):
+    """The gear (a 96-gon solidified in Blender, its n-gon caps on Blender's own triangles): its
+    side faces meet at the teeth's 90° corners, yet the side is one island beside the two caps,
+    not one island per face."""
+    pos, cv, fs, tri = built["gear"]
+    r = uvflat.unwrap(pos, cv, fs, method=method, triangles=tri)
+    assert shapes.check(pos, cv, fs, tri, r) == []
+    assert len(r.charts) == 3, sorted(c.faces for c in r.charts)
+    assert sorted(c.faces for c in r.charts) == [1, 1, 96]
 
 
 @pytest.mark.parametrize("method", ["abf", "slim", "lscm", "arap"])
