@@ -42,6 +42,7 @@ SHAPES = (
     "twisted_torus",   # a torus twisted by a simple deform
     "long_cylinder",   # 8 sides, 100 times longer than wide
     "gear",            # a 96-gon of 24 teeth solidified: its side faces meet at 90° creases
+    "cad_cross_bores", # a cube with two hexagonal bores, along x and along y (booleans): genus 2
 )
 
 
@@ -115,6 +116,15 @@ def _build(name):
         ops.mesh.primitive_cube_add(size=1, location=(0, 1, 0.3))
         cutters.append(added())
         return booleans(base, cutters)
+    elif name == "cad_cross_bores":
+        ops.mesh.primitive_cube_add(size=2)
+        base = added()
+        ops.mesh.primitive_cylinder_add(vertices=6, radius=0.4, depth=4, location=(0, 0, 0.5),
+                                        rotation=(0, np.pi / 2, 0))
+        along_x = added()
+        ops.mesh.primitive_cylinder_add(vertices=6, radius=0.4, depth=4, location=(0, 0, -0.5),
+                                        rotation=(np.pi / 2, 0, 0))
+        return booleans(base, [along_x, added()])
     elif name == "text":
         ops.object.text_add()
         txt = added()

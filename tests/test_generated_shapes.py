@@ -61,6 +61,7 @@ def euler_and_parts(cv, fs):
     ("grid_open", 1, 1, False),      # a disk
     ("screw", 0, 1, False),          # a tube open at both ends
     ("gear", 2, 1, True),            # a solid extrusion: a sphere's topology
+    ("cad_cross_bores", -2, 1, True),  # two bores that do not meet: genus 2
 ])
 def test_the_shapes_are_what_they_stand_for(built, name, euler, parts, closed):
     pos, cv, fs, tri = built[name]
@@ -130,6 +131,35 @@ def test_an_extrusion_s_side_is_one_strip_on_blender_s_triangles(built, method):
     assert shapes.check(pos, cv, fs, tri, r) == []
     assert len(r.charts) == 3, sorted(c.faces for c in r.charts)
     assert sorted(c.faces for c in r.charts) == [1, 1, 96]
+
+
+@pytest.mark.parametrize("method", ["abf", "slim", "lscm"])
+def test_bores_along_two_axes_are_each_one_strip(built, method):
+    """A cube with a hexagonal bore along x above one along y: each bore's wall is a ring of
+    faces meeting at 60° creases, along its own axis, and unrolls as one strip; the rims,
+    where the walls meet the cube's faces at 90°, stay cut. Before the creases along a second
+    axis were joined, the second bore's wall was one island per face (11 islands)."""
+    pos, cv, fs, tri = built["cad_cross_bores"]
+    r = uvflat.unwrap(pos, cv, fs, method=method, triangles=tri)
+    assert shapes.check(pos, cv, fs, tri, r) == []
+    assert r.phases["crease_cuts"] >= 1
+    starts = np.concatenate([[0], np.cumsum(fs)[:-1]])
+    centre = np.array([pos[cv[s:s + n]].mean(axis=0) for s, n in zip(starts, fs)])
+    walls = []
+    for axis, across, height in ((0, 1, 0.5), (1, 0, -0.5)):
+        # A wall face: inside the cube, within the bore's radius of its axis.
+        off_axis = np.hypot(centre[:, across], centre[:, 2] - height)
+        wall = (np.abs(centre[:, axis]) < 0.99) & (off_axis < 0.41)
+        assert wall.sum() == 6
+        # The wall is one island, and nothing else is in it.
+        islands = set(r.chart[wall].tolist())
+        assert len(islands) == 1, (axis, r.chart[wall])
+        assert (r.chart == islands.pop()).sum() == 6
+        walls.append(wall)
+    assert len(r.charts) <= 5, sorted(c.faces for c in r.charts)
+    for c in r.charts:
+        assert (c.status, c.method) == ("solved", method), c.reason
+        assert c.conformal < 1.001 and c.area < 1.001, (c.conformal, c.area)
 
 
 @pytest.mark.parametrize("method", ["abf", "slim", "lscm", "arap"])

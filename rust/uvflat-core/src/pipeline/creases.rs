@@ -177,8 +177,11 @@ pub fn crease_seams(ctx: &Context<'_, '_>, chart: &Chart) -> Option<Vec<[u32; 2]
 /// side unrolls as one strip instead of one island per face (a gear of 24 teeth: 98 islands,
 /// now 3: the band and its two caps).
 ///
-/// Only creases along the extrusion's axis are candidates: the direction most creases share
-/// (ties to the least direction), since its side edges share the axis while its rims turn.
+/// Chains are tried the flattest first (a hexagonal bore's 60° walls before the 90° rims
+/// where they meet the part's faces), then along the directions most creases share (an
+/// extrusion's side edges share its axis while its rims turn), so a part with bores or
+/// extrusions along several axes gets one strip per wall (a cube with a bore along x and one
+/// along y: 11 islands when only the commonest direction was joined, now 5).
 /// The unit is a chain: crease edges joined at flat inner vertices (`flat(v)`) with no other
 /// crease (points along one straight crease line), taken from its lowest edge, in passes
 /// until none more is left uncut. A chain is left uncut when:
@@ -264,11 +267,19 @@ fn join_developable(
     for e in (0..crease.len()).filter(|&e| crease[e]) {
         *parallel.entry(direction(e)).or_default() += 1;
     }
-    // Only the creases along the direction most of them share (the extrusion's axis; ties to
-    // the least direction): joining across creases of several directions folds regions into
-    // shapes whose unrolling can lie on itself (a plate joined to its edge and its underside).
-    let Some(axis) = parallel.iter().max_by(|a, b| a.1.cmp(b.1).then(b.0.cmp(a.0))).map(|x| *x.0) else { return };
-    let order: Vec<usize> = (0..crease.len()).filter(|&e| crease[e] && direction(e) == axis).collect();
+    // The flattest creases first (a hexagonal bore's 60° walls before the 90° rims where it
+    // meets a face), then along the directions most creases share (an extrusion's axis, where
+    // its side edges run, before its rims, which turn; ties to the least direction), then by
+    // id. A region joined along one direction is a band along it and joins no other way.
+    let mut axes: Vec<([i64; 3], usize)> = parallel.into_iter().collect();
+    axes.sort_unstable_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
+    let rank: std::collections::HashMap<[i64; 3], usize> = axes.iter().enumerate().map(|(i, a)| (a.0, i)).collect();
+    let mut order: Vec<(i64, usize, usize)> = (0..crease.len())
+        .filter(|&e| crease[e])
+        .map(|e| ((graph.dihedral[e] / ANGLE_STEP).round() as i64, rank[&direction(e)], e))
+        .collect();
+    order.sort_unstable();
+    let order: Vec<usize> = order.into_iter().map(|x| x.2).collect();
     loop {
         let mut changed = false;
         for &e0 in &order {
@@ -368,6 +379,10 @@ enum Shape {
 /// Largest `|cos|` between a face's normal and a band's axis (or a crease along it) for the
 /// face to count as parallel to the axis, and smallest cross product for two normals to differ.
 const AXIS_TOLERANCE: f64 = 1e-3;
+
+/// Creases whose dihedral angles round to the same multiple of this step count as equally
+/// sharp when [`join_developable`] orders them (5°).
+const ANGLE_STEP: f64 = 5.0 * std::f64::consts::PI / 180.0;
 
 /// The regions of `chart` cut along `creases` ([`crease_seams`]), each taken through the
 /// pipeline's road at split depth `depth`; the creases go with the first region's piece.
