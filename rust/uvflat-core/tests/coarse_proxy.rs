@@ -8,7 +8,7 @@ mod common;
 
 use common::{load, octahedron_sphere, shared_meshes, sphere, with_holes, Soup};
 use uvflat_core::charts::{build_charts, Chart};
-use uvflat_core::cuts::coarse::Proxy;
+use uvflat_core::cuts::coarse::{wants_proxy, Proxy, CLOSED_PROXY_FROM, PROXY_FROM, PROXY_VERTICES};
 use uvflat_core::cuts::{AutoSeamOptions, ChartCutter};
 use uvflat_core::mesh::PolyMesh;
 use uvflat_core::pipeline::predict::PROXY_MARGIN;
@@ -103,6 +103,27 @@ fn the_proxy_of_shared_meshes_keeps_their_topology() {
             check_proxy(&chart, chart.positions.len() / 6, name);
         }
     }
+}
+
+/// Closed charts plan on a proxy from `CLOSED_PROXY_FROM` triangles, of about a third of their
+/// vertices; a chart of that size with several holes does not until `PROXY_FROM`, nor does a
+/// smaller closed one.
+#[test]
+fn closed_charts_plan_on_a_proxy_from_a_lower_size() {
+    let closed = charts_of(&bumpy_ellipsoid(7)).remove(0);
+    let n = closed.triangles.len();
+    assert!((CLOSED_PROXY_FROM..PROXY_FROM).contains(&n), "{n} triangles");
+    assert!(wants_proxy(&closed));
+    let proxy = Proxy::new(&closed).expect("a closed chart of 131k triangles has a proxy");
+    let (v, m) = (closed.positions.len(), proxy.chart.positions.len());
+    assert!(m <= PROXY_VERTICES && m * 10 <= v * 4 && m * 10 >= v * 2, "{v} vertices coarsened to {m}");
+    let holes = with_holes(&bumpy_ellipsoid(7), 5, 30, 3);
+    let with_holes: Vec<Chart> = charts_of(&holes).into_iter().filter(|c| c.triangles.len() > 1000).collect();
+    assert_eq!(with_holes.len(), 1);
+    assert_eq!(with_holes[0].boundary_loops.len(), 5);
+    assert!(!wants_proxy(&with_holes[0]) && Proxy::new(&with_holes[0]).is_none());
+    let small = charts_of(&bumpy_ellipsoid(6)).remove(0);
+    assert!(!wants_proxy(&small) && Proxy::new(&small).is_none());
 }
 
 #[test]

@@ -40,6 +40,19 @@ use crate::geometry::{cross, dot, norm, sub};
 /// prediction round on the chart's own system costs a fraction of a second).
 pub const PROXY_FROM: usize = 200_000;
 
+/// Closed charts and charts of one outline plan on a proxy of a third of their vertices from
+/// this many triangles: a closed scan of 111k–144k triangles, planned in 16 rounds over the
+/// chart and its halves, spent most of its time there (`docs/performance.md`). Charts with
+/// many holes keep [`PROXY_FROM`]: on a scan of 141k triangles with 100 holes the smaller
+/// proxy read its plans too optimistic, and the repair took 72 rounds instead of 5.
+pub const CLOSED_PROXY_FROM: usize = 100_000;
+
+/// Whether `chart` plans on a proxy ([`Proxy::new`]).
+pub fn wants_proxy(chart: &Chart) -> bool {
+    let n = chart.triangles.len();
+    chart.defect.is_none() && (n >= PROXY_FROM || (n >= CLOSED_PROXY_FROM && chart.boundary_loops.len() <= 1))
+}
+
 /// Vertices of the proxy (about twice as many triangles): its factorization costs about a
 /// tenth of the chart's at 576k triangles, and its regions are a few edges wide on a scan of
 /// a million triangles.
@@ -65,13 +78,16 @@ pub struct Proxy {
 }
 
 impl Proxy {
-    /// The proxy of `chart` when it has at least [`PROXY_FROM`] triangles (see the module
-    /// docs): about [`PROXY_VERTICES`] vertices, more where collapses are refused.
+    /// The proxy of `chart` when it has at least [`PROXY_FROM`] triangles, or
+    /// [`CLOSED_PROXY_FROM`] with at most one outline ([`wants_proxy`]; see the module docs):
+    /// about [`PROXY_VERTICES`] vertices, a third of the chart's below [`PROXY_FROM`], more
+    /// where collapses are refused.
     pub fn new(chart: &Chart) -> Option<Proxy> {
-        if chart.triangles.len() < PROXY_FROM || chart.defect.is_some() {
+        if !wants_proxy(chart) {
             return None;
         }
-        Self::with_target(chart, PROXY_VERTICES)
+        let target = if chart.triangles.len() >= PROXY_FROM { PROXY_VERTICES } else { chart.positions.len() / 3 };
+        Self::with_target(chart, target.min(PROXY_VERTICES))
     }
 
     /// [`Self::new`] at any size, down to about `target` vertices.

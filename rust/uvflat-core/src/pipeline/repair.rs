@@ -64,8 +64,8 @@ pub fn cutter_with<'a>(ctx: &'a Context<'_, '_>, chart: &'a Chart, solver: Optio
 }
 
 /// The cutter `make` builds, with the chart's coarse proxy ([`cuts::coarse::Proxy`]) decimated
-/// beside it when the plan will read it: a chart of [`cuts::coarse::PROXY_FROM`] triangles or
-/// more, planned on the prediction, with no mirror asked for (the proxy serves no mirrored
+/// beside it when the plan will read it: a chart that has one ([`cuts::coarse::wants_proxy`]),
+/// planned on the prediction, with no mirror asked for (the proxy serves no mirrored
 /// chart). The decimation (0.4–0.5 s at 446k–576k triangles, on one thread) was otherwise the
 /// first round's, after the cutting state.
 fn with_proxy_beside<'a>(
@@ -73,7 +73,7 @@ fn with_proxy_beside<'a>(
     chart: &'a Chart,
     make: impl FnOnce() -> ChartCutter<'a> + Send,
 ) -> ChartCutter<'a> {
-    let beside = chart.triangles.len() >= cuts::coarse::PROXY_FROM
+    let beside = cuts::coarse::wants_proxy(chart)
         && ctx.plans_on_prediction()
         && ctx.options.auto_seams.symmetry == cuts::symmetry::Symmetry::None;
     if !beside {
