@@ -448,8 +448,9 @@ impl<'a> ChartCutter<'a> {
     }
 
     /// The coarse proxy of the chart ([`coarse::Proxy::new`]: charts of at least
-    /// [`coarse::PROXY_FROM`] triangles, closed ones from [`coarse::CLOSED_PROXY_FROM`]), made on first use; `None` on a smaller chart and on
-    /// a mirror-symmetric one (its cones are placed in pairs on the chart itself).
+    /// [`coarse::PROXY_FROM`] triangles, closed ones from [`coarse::CLOSED_PROXY_FROM`]), made
+    /// on first use; `None` on a smaller chart and on a mirror-symmetric one (its cones are
+    /// placed in pairs on the chart itself).
     pub fn proxy(&self) -> Option<&coarse::Proxy> {
         if self.mirror.is_some() || self.solver.is_none() {
             return None;
