@@ -43,6 +43,7 @@ SHAPES = (
     "long_cylinder",   # 8 sides, 100 times longer than wide
     "gear",            # a 96-gon of 24 teeth solidified: its side faces meet at 90° creases
     "cad_cross_bores", # a cube with two hexagonal bores, along x and along y (booleans): genus 2
+    "perforated",      # a flat plate of 40 x 40 quads with 3 x 3 bores (a boolean): nine holes
 )
 
 
@@ -125,6 +126,15 @@ def _build(name):
         ops.mesh.primitive_cylinder_add(vertices=6, radius=0.4, depth=4, location=(0, 0, -0.5),
                                         rotation=(np.pi / 2, 0, 0))
         return booleans(base, [along_x, added()])
+    elif name == "perforated":
+        ops.mesh.primitive_grid_add(x_subdivisions=40, y_subdivisions=40, size=4)
+        base = added()
+        ops.mesh.primitive_cylinder_add(vertices=12, radius=0.12, depth=2, location=(-1.6, -1.6, 0))
+        m = added().modifiers.new("array", "ARRAY")
+        m.count, m.relative_offset_displace = 3, (4.5, 0, 0)
+        m = added().modifiers.new("array_y", "ARRAY")
+        m.count, m.relative_offset_displace = 3, (0, 4.5, 0)
+        return booleans(base, [added()])
     elif name == "text":
         ops.object.text_add()
         txt = added()

@@ -62,6 +62,7 @@ def euler_and_parts(cv, fs):
     ("screw", 0, 1, False),          # a tube open at both ends
     ("gear", 2, 1, True),            # a solid extrusion: a sphere's topology
     ("cad_cross_bores", -2, 1, True),  # two bores that do not meet: genus 2
+    ("perforated", -8, 1, False),    # a disk with nine holes
 ])
 def test_the_shapes_are_what_they_stand_for(built, name, euler, parts, closed):
     pos, cv, fs, tri = built[name]
@@ -160,6 +161,22 @@ def test_bores_along_two_axes_are_each_one_strip(built, method):
     for c in r.charts:
         assert (c.status, c.method) == ("solved", method), c.reason
         assert c.conformal < 1.001 and c.area < 1.001, (c.conformal, c.area)
+
+
+@pytest.mark.parametrize("method", ["abf", "slim", "lscm"])
+def test_a_perforated_plate_is_one_island_laid_as_it_is(built, method):
+    """A flat plate cut by nine cylinders in Blender: the boolean leaves corners 1e-7 apart
+    where a cylinder touches a grid line. The plate is one island, its bores joined to its
+    outline, laid as it is (its projection; the methods' solves bent it around the slivers
+    there and split it in five)."""
+    pos, cv, fs, tri = built["perforated"]
+    r = uvflat.unwrap(pos, cv, fs, method=method, triangles=tri)
+    assert shapes.check(pos, cv, fs, tri, r) == []
+    assert len(r.charts) == 1, sorted(c.faces for c in r.charts)
+    c = r.charts[0]
+    assert (c.status, c.method, c.iterations) == ("solved", method, 0), c.reason
+    assert c.conformal < 1 + 1e-9 and c.area < 1 + 1e-9, (c.conformal, c.area)
+    assert len(r.new_seams) > 0
 
 
 @pytest.mark.parametrize("method", ["abf", "slim", "lscm", "arap"])

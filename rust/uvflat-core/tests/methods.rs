@@ -233,4 +233,9 @@ fn spectral_converges_on_developable_charts_in_a_few_steps() {
         assert!(c.residual <= 1e-10, "{}", c.residual);
         assert!(c.reason.is_none(), "{:?}", c.reason);
     }
+    // The flat quad is laid as it is by `unwrap` (methods/planar.rs); the solver itself too.
+    let mesh = uvflat_core::mesh::PolyMesh::new(&quad.positions, &quad.corner_verts, &quad.face_sizes).unwrap();
+    let chart = uvflat_core::charts::build_charts(&mesh, &[], None).remove(0);
+    let sol = uvflat_core::methods::spectral::solve(&chart, &[], &SpectralOptions::default()).unwrap();
+    assert!(sol.iterations <= 5 && sol.residual <= 1e-10, "{} iterations, residual {}", sol.iterations, sol.residual);
 }

@@ -95,7 +95,136 @@ pub fn triangulate_polygon_with(
             return tris.to_vec();
         }
     }
+    if n <= BEST_UP_TO && !strictly_convex(&p2) {
+        if let Some(tris) = best_min_angle(&p2, &mut taken) {
+            return tris;
+        }
+    }
     ear_clip(&p2, &mut taken)
+}
+
+/// Whether every corner of a polygon (counter-clockwise in its plane) turns left by more
+/// than [`STRAIGHT_TURN`]: no corner is reflex or on a straight side, so no ear clipped can
+/// hold three corners on one line.
+fn strictly_convex(p2: &[[f64; 2]]) -> bool {
+    let n = p2.len();
+    (0..n).all(|b| {
+        let (pa, pb, pc) = (p2[(b + n - 1) % n], p2[b], p2[(b + 1) % n]);
+        let area2 = (pb[0] - pa[0]) * (pc[1] - pa[1]) - (pb[1] - pa[1]) * (pc[0] - pa[0]);
+        let (ab, bc) = ((pb[0] - pa[0]).hypot(pb[1] - pa[1]), (pc[0] - pb[0]).hypot(pc[1] - pb[1]));
+        area2 > STRAIGHT_TURN * ab * bc
+    })
+}
+
+/// Smallest sine of a corner's turn for [`strictly_convex`]: far above round-off, since a
+/// corner 1e-7 from its neighbour on a straight side of a tilted face turns by round-off of
+/// about 1e-9 in the face's plane.
+const STRAIGHT_TURN: f64 = 1e-6;
+
+/// Polygons of up to this many corners that are not strictly convex (a reflex corner, or one
+/// on a straight side) are triangulated for the largest smallest angle ([`best_min_angle`],
+/// O(n³)); larger ones, and convex ones, by ear clipping.
+pub const BEST_UP_TO: usize = 32;
+
+/// The triangulation of a simple polygon (counter-clockwise in its plane, `p2`) whose smallest
+/// angle is largest, by dynamic programming over its diagonals (Klincsek 1980: the best
+/// triangulation of the sub-polygon `i..=j` is a triangle `(i, k, j)` with the best ones on
+/// either side of it). Greedy ear clipping can be left with three corners on one line where a
+/// side holds an extra corner (a pentagon that is a square with a corner on one side: clipping
+/// the two best ears first leaves the straight corner's triangle, without area, whose angles
+/// are then clamped and bend a flat face). Diagonals that are `taken` cost as in
+/// [`ear_clip`]. A diagonal must lie inside the polygon, crossing no side and passing
+/// through no corner. `None` when the polygon has no such triangulation (self-intersecting, or
+/// degenerate to round-off); the caller clips ears then.
+fn best_min_angle(p2: &[[f64; 2]], taken: &mut impl FnMut(usize, usize) -> bool) -> Option<Vec<[usize; 3]>> {
+    let n = p2.len();
+    let area2 = |a: [f64; 2], b: [f64; 2], c: [f64; 2]| (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+    let scale = p2.iter().map(|p| p[0].abs().max(p[1].abs())).fold(0.0f64, f64::max).max(f64::MIN_POSITIVE);
+    // Whether segments ab and cd meet (touching counts), to round-off of the polygon's scale.
+    let eps = 1e-12 * scale * scale;
+    let within = |p: [f64; 2], q: [f64; 2], r: [f64; 2]| {
+        (0..2).all(|k| r[k] >= p[k].min(q[k]) - 1e-12 * scale && r[k] <= p[k].max(q[k]) + 1e-12 * scale)
+    };
+    let meet = |a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]| {
+        let (d1, d2) = (area2(a, b, c), area2(a, b, d));
+        let (d3, d4) = (area2(c, d, a), area2(c, d, b));
+        let apart = |x: f64, y: f64| (x > eps && y < -eps) || (x < -eps && y > eps);
+        if apart(d1, d2) && apart(d3, d4) {
+            return true;
+        }
+        (d1.abs() <= eps && within(a, b, c))
+            || (d2.abs() <= eps && within(a, b, d))
+            || (d3.abs() <= eps && within(c, d, a))
+            || (d4.abs() <= eps && within(c, d, b))
+    };
+    // Diagonal (i, j) strictly inside the corner at i, between its sides.
+    let inside_corner = |i: usize, j: usize| {
+        let (a, b, c) = (p2[(i + n - 1) % n], p2[i], p2[(i + 1) % n]);
+        let d = p2[j];
+        if area2(a, b, c) > 0.0 {
+            area2(b, c, d) > 0.0 && area2(b, d, a) > 0.0
+        } else {
+            !(area2(b, d, c) >= 0.0 && area2(b, a, d) >= 0.0)
+        }
+    };
+    let side = |i: usize, j: usize| j == i + 1 || (i == 0 && j == n - 1);
+    // valid[i * n + j], i < j: a side, or a diagonal inside both corners that crosses or
+    // touches no side not ending at i or j, and passes through no other corner.
+    let mut valid = vec![false; n * n];
+    for i in 0..n {
+        for j in i + 1..n {
+            let (a, b) = (p2[i], p2[j]);
+            let crosses = (0..n).any(|k| {
+                let l = (k + 1) % n;
+                ![k, l].contains(&i) && ![k, l].contains(&j) && meet(a, b, p2[k], p2[l])
+            });
+            let through = (0..n).any(|k| k != i && k != j && area2(a, b, p2[k]).abs() <= eps && within(a, b, p2[k]));
+            valid[i * n + j] = side(i, j) || (inside_corner(i, j) && inside_corner(j, i) && !crosses && !through);
+        }
+    }
+    let mut cost = |i: usize, j: usize| if !side(i, j) && taken(i, j) { 10.0 } else { 0.0 };
+    // best[i * n + j]: the largest smallest angle over triangulations of corners i..=j, and the
+    // apex k of the triangle on (i, j).
+    let mut best = vec![(f64::NEG_INFINITY, usize::MAX); n * n];
+    for i in 0..n - 1 {
+        best[i * n + i + 1] = (f64::INFINITY, usize::MAX);
+    }
+    for gap in 2..n {
+        for i in 0..n - gap {
+            let j = i + gap;
+            if !valid[i * n + j] {
+                continue;
+            }
+            let mut here = (f64::NEG_INFINITY, usize::MAX);
+            for k in i + 1..j {
+                let (left, right) = (best[i * n + k].0, best[k * n + j].0);
+                if left == f64::NEG_INFINITY || right == f64::NEG_INFINITY || !(area2(p2[i], p2[k], p2[j]) > 0.0) {
+                    continue;
+                }
+                let q = (min_angle_2d(p2[i], p2[k], p2[j]) - cost(i, k) - cost(k, j)).min(left).min(right);
+                if q > here.0 {
+                    here = (q, k);
+                }
+            }
+            best[i * n + j] = here;
+        }
+    }
+    if best[n - 1].1 == usize::MAX {
+        return None;
+    }
+    let mut out = Vec::with_capacity(n - 2);
+    let mut stack = vec![(0usize, n - 1)];
+    while let Some((i, j)) = stack.pop() {
+        let k = best[i * n + j].1;
+        if k == usize::MAX {
+            continue;
+        }
+        out.push([i, k, j]);
+        stack.push((i, k));
+        stack.push((k, j));
+    }
+    out.sort_unstable();
+    (out.len() == n - 2).then_some(out)
 }
 
 /// Smallest share of a quad's area (in its Newell plane) that each of the four triangles of
@@ -486,6 +615,85 @@ mod tests {
         let total: f64 = t.iter().map(|&t| area2(&p, t)).sum();
         assert!((total - 6.0).abs() < 1e-12, "twice the L area is 6, got {total}");
         assert!(t.iter().all(|&t| area2(&p, t) > 0.0));
+    }
+
+    /// Smallest angle of a triangulation of `p`.
+    fn smallest_angle(p: &[[f64; 3]], t: &[[usize; 3]]) -> f64 {
+        let q = |i: usize| [p[i][0], p[i][1]];
+        t.iter().map(|t| min_angle_2d(q(t[0]), q(t[1]), q(t[2]))).fold(f64::INFINITY, f64::min)
+    }
+
+    #[test]
+    fn a_corner_on_a_straight_side_leaves_no_triangle_without_area() {
+        // A square with a fifth corner 1e-7 up its right side (a boolean's leftover), turned
+        // to start anywhere: two of its five triangulations hold that corner's triangle on one
+        // line (`tests/flat_charts.rs` has greedy ear clipping take one in a plate).
+        let square = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1e-7, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+        for start in 0..5 {
+            let p: Vec<[f64; 3]> = (0..5).map(|k| square[(start + k) % 5]).collect();
+            let t = triangulate_polygon(&p);
+            assert_eq!(t.len(), 3);
+            assert!(t.iter().all(|&t| area2(&p, t) > 1e-9), "{start}: {t:?}");
+            let total: f64 = t.iter().map(|&t| area2(&p, t)).sum();
+            assert!((total - 2.0).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn a_corner_on_a_straight_side_of_a_tilted_face_leaves_no_triangle_without_area() {
+        // The same square on a plane turned by 0.6 rad about x, and by 0.3 about z.
+        let (c, s, c2, s2) = (0.6f64.cos(), 0.6f64.sin(), 0.3f64.cos(), 0.3f64.sin());
+        let p: Vec<[f64; 3]> = [[0.0, 0.0], [1.0, 0.0], [1.0, 1e-7], [1.0, 1.0], [0.0, 1.0]]
+            .iter()
+            .map(|&[x, y]| {
+                let (y, z) = (c * y, s * y);
+                [c2 * x - s2 * y, s2 * x + c2 * y, z]
+            })
+            .collect();
+        let t = triangulate_polygon(&p);
+        assert_eq!(t.len(), 3);
+        let area = |t: [usize; 3]| {
+            let (a, b, d) = (p[t[0]], p[t[1]], p[t[2]]);
+            crate::geometry::norm(crate::geometry::cross(crate::geometry::sub(b, a), crate::geometry::sub(d, a)))
+        };
+        assert!(t.iter().all(|&t| area(t) > 1e-9), "{t:?}");
+    }
+
+    #[test]
+    fn small_polygons_get_the_triangulation_with_the_largest_smallest_angle() {
+        // Star-shaped polygons of 5 to 32 corners (radii varied by a fixed sequence), some
+        // with corners on straight sides: every triangulation covers the polygon with positive
+        // triangles, and its smallest angle is at least the greedy ear clipping's.
+        let mut seed = 7u64;
+        let mut next = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for n in 5..=BEST_UP_TO {
+            for _ in 0..4 {
+                let mut p: Vec<[f64; 3]> = (0..n)
+                    .map(|k| {
+                        let a = std::f64::consts::TAU * (k as f64 + 0.4 * next()) / n as f64;
+                        let r = 0.4 + next();
+                        [r * a.cos(), r * a.sin(), 0.0]
+                    })
+                    .collect();
+                // A corner moved onto the middle of its neighbours' segment.
+                if next() < 0.5 {
+                    let k = (next() * n as f64) as usize % n;
+                    let (a, b) = (p[(k + n - 1) % n], p[(k + 1) % n]);
+                    p[k] = [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0, 0.0];
+                }
+                let twice: f64 = (0..n).map(|k| p[k][0] * p[(k + 1) % n][1] - p[(k + 1) % n][0] * p[k][1]).sum();
+                let t = triangulate_polygon(&p);
+                assert_eq!(t.len(), n - 2);
+                assert!(t.iter().all(|&t| area2(&p, t) > 0.0), "{n}: {t:?}");
+                let total: f64 = t.iter().map(|&t| area2(&p, t)).sum();
+                assert!((total - twice).abs() < 1e-9 * twice.abs(), "{n}: {total} against {twice}");
+                let ear = ear_clip(&p.iter().map(|q| [q[0], q[1]]).collect::<Vec<_>>(), &mut |_, _| false);
+                assert!(smallest_angle(&p, &t) >= smallest_angle(&p, &ear) - 1e-12, "{n}");
+            }
+        }
     }
 
     #[test]

@@ -12,6 +12,7 @@ pub mod mean_value;
 pub mod mips;
 pub mod nonlinear;
 pub mod options;
+pub mod planar;
 pub mod quad_repair;
 pub mod scaffold;
 pub mod slim;
@@ -498,6 +499,16 @@ impl Method {
         !matches!(self, Method::Tutte { .. } | Method::MeanValue { .. } | Method::Harmonic { .. })
     }
 
+    /// Whether the method's optimum on a flat chart is a similarity of it, so the chart is laid
+    /// as it is ([`planar`]; a direct solve, 0 iterations): every free-boundary method but ABF
+    /// with a convex outline or prescribed angle sums, which bend the outline.
+    pub fn lays_flat_as_is(&self) -> bool {
+        match self {
+            Method::Abf(o) => o.boundary != abf::AbfBoundary::Convex && o.angle_sums.is_empty(),
+            _ => self.free_boundary(),
+        }
+    }
+
     /// Whether the method trades angle distortion for area distortion (ARAP, SLIM, scaffold).
     /// The others (conformal maps, MIPS among them: its energy σ1/σ2 + σ2/σ1 sees angles only,
     /// and fixed-boundary maps) spread area at least about as much as the conformal
@@ -559,7 +570,11 @@ fn defect(chart: &Chart, uv: &[[f64; 2]], promise: bool, no_overlap: bool) -> Op
         if flips > 0 {
             return Some(format!("the map has {flips} flipped or zero-area triangle(s) or folded quad(s) (degenerate 3D triangles?)"));
         }
-        if no_overlap && crate::metrics::boundary_self_overlap(uv, &chart.boundary_loops) {
+        // Closed seams (the two sides of a cut on each other, as a flat chart laid as it is
+        // has them) are no overlap.
+        let (p, t, loops) = (&chart.positions, &chart.triangles, &chart.boundary_loops);
+        let overlap = || crate::metrics::closed_seams::outline_overlap(p, t, uv, loops);
+        if no_overlap && overlap() {
             return Some("the map's boundary crosses itself".into());
         }
     }
@@ -590,7 +605,12 @@ pub fn solve(method: &Method, chart: &Chart, pins: &[(u32, [f64; 2])]) -> std::r
     require_disk(chart)?;
     let (unit, unit_pins, size) = unit_chart(chart, pins);
     let promise = pins.is_empty() && method.promises_no_flips(chart.kind);
-    let mut sol = dispatch(method, &unit, &unit_pins)?;
+    // A flat chart is laid as it is by every method whose optimum it is ([`planar`]).
+    let flat = if unit_pins.is_empty() && method.lays_flat_as_is() { planar::project(&unit) } else { None };
+    let mut sol = match flat {
+        Some(uv) => ChartSolution::direct(uv),
+        None => dispatch(method, &unit, &unit_pins)?,
+    };
     // A method that already fell back has said why; only its finiteness is checked.
     let no_overlap = matches!(method, Method::Scaffold(_));
     if let Some(why) = defect(&unit, &sol.uv, promise && sol.fallback.is_none(), no_overlap) {
