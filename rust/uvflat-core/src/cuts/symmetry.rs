@@ -138,13 +138,7 @@ pub fn detect(graph: &ChartGraph, positions: &[[f64; 3]], symmetry: Symmetry) ->
 /// The mirror in the plane through `centre` with unit `normal`, if it is one (conditions 1–3).
 pub fn mirror_for_plane(graph: &ChartGraph, positions: &[[f64; 3]], centre: [f64; 3], normal: [f64; 3]) -> Option<Mirror> {
     let n = positions.len();
-    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-    for p in positions {
-        for k in 0..3 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
-    }
+    let (lo, hi) = crate::geometry::bounds(positions.iter());
     let diagonal = norm(sub(hi, lo));
     let l = norm(normal);
     if !(diagonal > 0.0 && diagonal.is_finite() && l > 0.0) {

@@ -35,7 +35,7 @@
 use rayon::prelude::*;
 
 use crate::charts::Chart;
-use crate::geometry::{cross, dot, norm, sub};
+use crate::geometry::{bounds, cross, dot, norm, sub};
 use crate::mesh::PolyMesh;
 
 /// Rays per vertex.
@@ -488,17 +488,6 @@ fn spread_from_samples(chart: &Chart, samples: &[u32], values: &[f64]) -> Vec<f6
         }
     }
     out
-}
-
-/// Axis-aligned bounds of points.
-fn bounds<'p>(points: impl Iterator<Item = &'p [f64; 3]>) -> ([f64; 3], [f64; 3]) {
-    points.fold(([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]), |(mut lo, mut hi), p| {
-        for k in 0..3 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
-        (lo, hi)
-    })
 }
 
 #[cfg(test)]

@@ -36,6 +36,16 @@ pub fn unit(a: [f64; 3]) -> [f64; 3] {
         [0.0; 3]
     }
 }
+/// Axis-aligned bounds `(lo, hi)` of points (infinite and reversed when there are none).
+pub fn bounds<'p>(points: impl Iterator<Item = &'p [f64; 3]>) -> ([f64; 3], [f64; 3]) {
+    points.fold(([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]), |(mut lo, mut hi), p| {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+        (lo, hi)
+    })
+}
 /// Newell's normal of the polygon `point(0), …, point(n − 1)`: twice its vector area, robust
 /// for non-planar polygons (its length is twice the area of a planar one).
 pub fn newell_normal(n: usize, point: impl Fn(usize) -> [f64; 3]) -> [f64; 3] {

@@ -22,7 +22,7 @@
 //! would keep none in UV): only a map the report accepts is laid so. Deterministic.
 
 use crate::charts::Chart;
-use crate::geometry::{cross, dot, norm, sub, unit};
+use crate::geometry::{bounds, cross, dot, norm, sub, unit};
 
 /// Largest distance of a vertex from the chart's plane, as a share of its bounding-box
 /// diagonal, for the chart to count as flat (float32 coordinates of a tilted plane are off by
@@ -49,13 +49,7 @@ pub fn project(chart: &Chart) -> Option<Vec<[f64; 2]>> {
     let z = unit(normal);
     let n = p.len() as f64;
     let centre = p.iter().fold([0.0; 3], |a, q| [a[0] + q[0] / n, a[1] + q[1] / n, a[2] + q[2] / n]);
-    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-    for q in p {
-        for k in 0..3 {
-            lo[k] = lo[k].min(q[k]);
-            hi[k] = hi[k].max(q[k]);
-        }
-    }
+    let (lo, hi) = bounds(p.iter());
     let size = norm(sub(hi, lo));
     if !(size > 0.0 && size.is_finite()) {
         return None;
