@@ -95,35 +95,27 @@ pub fn triangulate_polygon_with(
             return tris.to_vec();
         }
     }
-    if n <= BEST_UP_TO && !strictly_convex(&p2) {
-        if let Some(tris) = best_min_angle(&p2, &mut taken) {
-            return tris;
+    let clipped = ear_clip(&p2, &mut taken);
+    // Ear clipping's triangles, unless they hold an angle flattening would clamp (three
+    // corners on one line, as a greedy clip can leave them) and a better triangulation exists.
+    let smallest = |t: &[[usize; 3]]| {
+        let angles = t.iter().map(|t| min_angle_2d(p2[t[0]], p2[t[1]], p2[t[2]]));
+        angles.fold(f64::INFINITY, |a, b| if b.is_nan() { f64::NEG_INFINITY } else { a.min(b) })
+    };
+    let worst = smallest(&clipped);
+    if n <= BEST_UP_TO && !(worst >= crate::geometry::MIN_ANGLE) {
+        if let Some(best) = best_min_angle(&p2, &mut taken) {
+            if smallest(&best) > worst {
+                return best;
+            }
         }
     }
-    ear_clip(&p2, &mut taken)
+    clipped
 }
 
-/// Whether every corner of a polygon (counter-clockwise in its plane) turns left by more
-/// than [`STRAIGHT_TURN`]: no corner is reflex or on a straight side, so no ear clipped can
-/// hold three corners on one line.
-fn strictly_convex(p2: &[[f64; 2]]) -> bool {
-    let n = p2.len();
-    (0..n).all(|b| {
-        let (pa, pb, pc) = (p2[(b + n - 1) % n], p2[b], p2[(b + 1) % n]);
-        let area2 = (pb[0] - pa[0]) * (pc[1] - pa[1]) - (pb[1] - pa[1]) * (pc[0] - pa[0]);
-        let (ab, bc) = ((pb[0] - pa[0]).hypot(pb[1] - pa[1]), (pc[0] - pb[0]).hypot(pc[1] - pb[1]));
-        area2 > STRAIGHT_TURN * ab * bc
-    })
-}
-
-/// Smallest sine of a corner's turn for [`strictly_convex`]: far above round-off, since a
-/// corner 1e-7 from its neighbour on a straight side of a tilted face turns by round-off of
-/// about 1e-9 in the face's plane.
-const STRAIGHT_TURN: f64 = 1e-6;
-
-/// Polygons of up to this many corners that are not strictly convex (a reflex corner, or one
-/// on a straight side) are triangulated for the largest smallest angle ([`best_min_angle`],
-/// O(n³)); larger ones, and convex ones, by ear clipping.
+/// Polygons of up to this many corners whose ear clipping holds an angle below
+/// [`crate::geometry::MIN_ANGLE`] are triangulated for the largest smallest angle instead
+/// ([`best_min_angle`], O(n³)) where that does better.
 pub const BEST_UP_TO: usize = 32;
 
 /// The triangulation of a simple polygon (counter-clockwise in its plane, `p2`) whose smallest
