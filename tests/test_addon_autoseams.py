@@ -384,3 +384,55 @@ def test_triangles_without_area_keep_the_rule_through_the_operator(ext, scene, m
     m, outside = _islands_density_outside(after, 2.0)
     assert m.flips == 0 and m.overlapping_charts == 0, m
     assert max(outside) <= 0.05 + 1e-9, outside
+
+
+def _perforated_plate(name="Plate"):
+    """A flat plate of 40 x 40 quads with 3 x 3 bores, cut by a boolean whose result is applied
+    (its n-gons, and corners 1e-7 apart where a cylinder touches a grid line)."""
+    bpy.ops.mesh.primitive_cylinder_add(vertices=12, radius=0.12, depth=2, location=(-1.6, -1.6, 0))
+    cutter = bpy.context.active_object
+    for axis, name_ in ((0, "x"), (1, "y")):
+        m = cutter.modifiers.new(name_, "ARRAY")
+        m.count = 3
+        m.relative_offset_displace = (4.5, 0, 0) if axis == 0 else (0, 4.5, 0)
+    bpy.ops.mesh.primitive_grid_add(x_subdivisions=40, y_subdivisions=40, size=4)
+    obj = bpy.context.active_object
+    obj.name = name
+    b = obj.modifiers.new("bores", "BOOLEAN")
+    b.operation, b.object = "DIFFERENCE", cutter
+    bpy.ops.object.modifier_apply(modifier=b.name)
+    bpy.data.objects.remove(cutter)
+    common.mesh_io().write_seams(obj.data, np.zeros(len(obj.data.edges), dtype=bool))
+    return obj
+
+
+@pytest.mark.parametrize("method", ["abf", "slim"])
+def test_a_perforated_plate_is_one_island_laid_as_it_is_through_the_operator(ext, scene, method):
+    """The plate (`_perforated_plate`) through the real operator: its nine bores are joined to
+    its outline by marked seams, and it is one island solved by the method with no distortion
+    and no flip on Blender's triangles (before the flat projection: five islands)."""
+    obj = _perforated_plate()
+    assert len(obj.data.polygons) > 1500
+    result, summary = unwrap(ext, [obj], method=method)
+    assert result == {"FINISHED"} and not summary.failed, summary.line()
+    res = summary.results[obj.name]
+    assert np.asarray(res.face_solved).all()
+    assert len(res.charts) == 1, [(c.faces, c.reason) for c in res.charts]
+    c = res.charts[0]
+    assert (c.status, c.method, c.iterations) == ("solved", method, 0), c.reason
+    assert c.conformal < 1 + 1e-6 and c.area < 1 + 1e-6, (c.conformal, c.area)
+    after = read(ext, obj)
+    assert summary.seams_added == len(after.seams) > 0
+    # Blender's own triangles (its n-gons are concave around the bores, so a fan from the first
+    # corner is no triangulation of them), on the UVs as Blender stores them: all positive.
+    me = obj.data
+    me.calc_loop_triangles()
+    tri = np.empty(3 * len(me.loop_triangles), dtype=np.int64)
+    me.loop_triangles.foreach_get("loops", tri)
+    a, b, c = (after.uv[tri[k::3]] for k in range(3))
+    signed = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
+    assert (signed > 0).all() or (signed < 0).all(), (signed > 0).sum()
+    import uvflat
+
+    m = uvflat.metrics(after.positions, after.corner_verts, after.face_sizes, after.uv, triangles=tri.reshape(-1, 3))
+    assert m.flips == 0 and m.overlapping_charts == 0, m

@@ -263,23 +263,21 @@ fn join_developable(
         let d = if d[k] < 0.0 { [-d[0], -d[1], -d[2]] } else { d };
         d.map(|x| (x / AXIS_TOLERANCE).round() as i64)
     };
+    let creases: Vec<(usize, [i64; 3])> = (0..crease.len()).filter(|&e| crease[e]).map(|e| (e, direction(e))).collect();
     let mut parallel: std::collections::HashMap<[i64; 3], usize> = Default::default();
-    for e in (0..crease.len()).filter(|&e| crease[e]) {
-        *parallel.entry(direction(e)).or_default() += 1;
+    for &(_, d) in &creases {
+        *parallel.entry(d).or_default() += 1;
     }
     // The flattest creases first (a hexagonal bore's 60° walls before the 90° rims where it
     // meets a face), then along the directions most creases share (an extrusion's axis, where
     // its side edges run, before its rims, which turn; ties to the least direction), then by
     // id. A region joined along one direction is a band along it and joins no other way.
-    let mut axes: Vec<([i64; 3], usize)> = parallel.into_iter().collect();
-    axes.sort_unstable_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
-    let rank: std::collections::HashMap<[i64; 3], usize> = axes.iter().enumerate().map(|(i, a)| (a.0, i)).collect();
-    let mut order: Vec<(i64, usize, usize)> = (0..crease.len())
-        .filter(|&e| crease[e])
-        .map(|e| ((graph.dihedral[e] / ANGLE_STEP).round() as i64, rank[&direction(e)], e))
+    let mut order: Vec<(i64, std::cmp::Reverse<usize>, [i64; 3], usize)> = creases
+        .iter()
+        .map(|&(e, d)| ((graph.dihedral[e] / ANGLE_STEP).round() as i64, std::cmp::Reverse(parallel[&d]), d, e))
         .collect();
     order.sort_unstable();
-    let order: Vec<usize> = order.into_iter().map(|x| x.2).collect();
+    let order: Vec<usize> = order.into_iter().map(|x| x.3).collect();
     loop {
         let mut changed = false;
         for &e0 in &order {
