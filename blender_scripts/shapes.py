@@ -44,6 +44,7 @@ SHAPES = (
     "gear",            # a 96-gon of 24 teeth solidified: its side faces meet at 90° creases
     "cad_cross_bores", # a cube with two hexagonal bores, along x and along y (booleans): genus 2
     "perforated",      # a flat plate of 40 x 40 quads with 3 x 3 bores (a boolean): nine holes
+    "glyphs",          # flat text: letters with holes, the Q's tail touching its ring (a crack)
 )
 
 
@@ -140,6 +141,10 @@ def _build(name):
         txt = added()
         txt.data.body = "Blender UV"
         txt.data.extrude = 0.1
+        ops.object.convert(target="MESH")
+    elif name == "glyphs":
+        ops.object.text_add()
+        added().data.body = "OBAQ%"
         ops.object.convert(target="MESH")
     elif name == "grid_open":
         ops.mesh.primitive_grid_add(x_subdivisions=60, y_subdivisions=60)

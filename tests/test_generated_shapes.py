@@ -63,6 +63,7 @@ def euler_and_parts(cv, fs):
     ("gear", 2, 1, True),            # a solid extrusion: a sphere's topology
     ("cad_cross_bores", -2, 1, True),  # two bores that do not meet: genus 2
     ("perforated", -8, 1, False),    # a disk with nine holes
+    ("glyphs", 0, 7, False),         # O, B, A, Q and the three parts of %: 7 holes in 7 parts
 ])
 def test_the_shapes_are_what_they_stand_for(built, name, euler, parts, closed):
     pos, cv, fs, tri = built[name]
@@ -177,6 +178,23 @@ def test_a_perforated_plate_is_one_island_laid_as_it_is(built, method):
     assert (c.status, c.method, c.iterations) == ("solved", method, 0), c.reason
     assert c.conformal < 1 + 1e-9 and c.area < 1 + 1e-9, (c.conformal, c.area)
     assert len(r.new_seams) > 0
+
+
+@pytest.mark.parametrize("method", ["abf", "slim", "lscm", "scaffold"])
+def test_flat_glyphs_are_one_island_each_even_where_contours_touch(built, method):
+    """Flat text as Blender fills it: the Q's tail touches its ring at a vertex lying on an
+    outline edge of the ring (a crack of zero width). Each glyph part is one island laid as it
+    is, its holes joined to its outline; the crack, laid closed, is no outline crossing (it
+    was: the Q came out invalid, or in two)."""
+    pos, cv, fs, tri = built["glyphs"]
+    chi, parts, boundary = euler_and_parts(cv, fs)
+    r = uvflat.unwrap(pos, cv, fs, method=method, triangles=tri)
+    assert shapes.check(pos, cv, fs, tri, r) == []
+    assert len(r.charts) == parts, sorted(c.faces for c in r.charts)
+    for c in r.charts:
+        assert (c.status, c.method, c.iterations) == ("solved", method, 0), c.reason
+        assert c.conformal < 1 + 1e-9 and c.area < 1 + 1e-9, (c.conformal, c.area)
+    assert len(r.new_seams) > 0  # the holes of O, B, A, Q and %
 
 
 @pytest.mark.parametrize("method", ["abf", "slim", "lscm", "arap"])

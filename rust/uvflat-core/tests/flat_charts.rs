@@ -5,7 +5,8 @@
 //! leaves where its cutter touches a grid line). Charts that are not flat, or whose flat map
 //! would hold a triangle without area, are solved by the method as before. A flat chart laid
 //! so is reported solved by the method, with 0 iterations and no note: the map is the method's
-//! own optimum.
+//! own optimum. A flat chart with a crack (a T-junction on its outline, as where a glyph's
+//! contours touch) is laid closed and kept as one island: its sides touch at one surface point.
 
 use uvflat_core::methods::planar;
 use uvflat_core::{unwrap, ChartStatus, Method, UnwrapOptions};
@@ -113,4 +114,35 @@ fn charts_that_are_not_flat_or_would_keep_a_triangle_without_area_are_solved_by_
     assert!(planar::project(&chart(&bent)).is_none());
     assert!(planar::project(&chart(&collinear)).is_none());
     assert!(planar::project(&chart(&plate(12, &HOLES, false, 0.0))).is_some());
+}
+
+#[test]
+fn a_flat_chart_with_a_crack_is_one_island_laid_closed() {
+    // The square [0, 4]² (tilted) with a crack of zero width down its middle from the top edge
+    // to (2, 2): the crack's right side is one edge, its left side turns away at (2, 3), a
+    // vertex on that edge; the same with the vertex off the edge by single-precision rounding.
+    let (c, s) = (0.5f64.cos(), 0.5f64.sin());
+    let place = |x: f64, y: f64| [x, c * y, s * y];
+    for off in [0.0, 2e-7] {
+        let pts =
+            [(0.0, 0.0), (4.0, 0.0), (4.0, 4.0), (2.0, 4.0), (2.0, 2.0), (2.0 + off, 3.0), (0.0, 4.0), (2.0, 1.0)];
+        let positions: Vec<[f64; 3]> = pts.iter().map(|&(x, y)| place(x, y)).collect();
+        let tris: [[u32; 3]; 7] = [[1, 2, 3], [1, 3, 4], [7, 1, 4], [0, 1, 7], [0, 7, 4], [0, 4, 5], [0, 5, 6]];
+        let soup = Soup {
+            positions,
+            corner_verts: tris.iter().flatten().copied().collect(),
+            face_sizes: vec![3; tris.len()],
+        };
+        for name in ["abf", "lscm", "slim", "scaffold"] {
+            let r = run(&soup, name, true);
+            let what = r.charts.iter().map(|c| (c.faces, c.status, &c.reason)).collect::<Vec<_>>();
+            assert_eq!(r.charts.len(), 1, "{off} {name}: {what:?}");
+            let c = &r.charts[0];
+            let got = (c.status, c.iterations, c.flips, c.overlap);
+            assert_eq!(got, (ChartStatus::Solved, 0, 0, false), "{off} {name}: {what:?}");
+            assert!(r.new_seams.is_empty(), "{off} {name}: no cut");
+            let d = c.distortion;
+            assert!(d.conformal < 1.0 + 1e-9 && d.area < 1.0 + 1e-9, "{off} {name}: {d:?}");
+        }
+    }
 }

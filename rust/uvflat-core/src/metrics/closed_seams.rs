@@ -17,6 +17,21 @@
 //!   are disjoint to within the same tolerance, by separating axes): the two sides of the
 //!   seam lie on either side of it.
 //!
+//! A crack in the mesh is laid closed the same way: a T-junction (an outline vertex lying on
+//! an outline edge in 3D, as where two contours of a font's glyph or of a CAD export touch)
+//! or a slit of zero width (two outline edges folding back onto each other). The exact map of
+//! flat surface puts the vertex on the edge in UV too. Such a contact is benign when:
+//!
+//! * every end of either segment that lies on the other in UV (within [`CRACK_TOLERANCE`] of
+//!   the outline's extent) is the same 3D point as the place it touches (the point of the other
+//!   segment at the same share of its length, within [`CRACK_TOLERANCE`] of the outline's 3D
+//!   extent: rounding to single precision moves a T-junction's vertex off its edge by about
+//!   1e-7), and at least one does (segments whose interiors cross are no crack); and
+//! * the triangles around the touching end do not overlap those around the other segment's
+//!   ends by more than that tolerance; and
+//! * the touching end is no copy of either end of the other segment (the two sides of a cut
+//!   are held to the closed seam's tighter tolerance above).
+//!
 //! Every other contact counts as in [`super::boundary_self_overlap`]: crossings, touches of
 //! different surface points, a seam's sides lying on each other only nearly (its copies
 //! further apart than the tolerance). Flips are counted apart ([`super::flipped_triangles`]).
@@ -48,6 +63,7 @@ pub fn outline_crossings(
 /// The outline's vertices grouped by 3D position, and the triangles around each vertex
 /// (made on first use: most outlines never touch themselves).
 struct Twins<'a> {
+    positions: &'a [[f64; 3]],
     triangles: &'a [[u32; 3]],
     uv: &'a [[f64; 2]],
     /// Per chart vertex on the outline: the lowest outline vertex at the same 3D position
@@ -58,6 +74,8 @@ struct Twins<'a> {
     /// How far apart two copies' UVs may be and still count as one point: [`TWIN_TOLERANCE`]
     /// of the outline's extent.
     tolerance: f64,
+    /// [`CRACK_TOLERANCE`] of the outline's extent in UV and in 3D.
+    crack: [f64; 2],
 }
 
 /// Copies of one vertex count as one UV point within this share of the outline's extent (an
@@ -65,8 +83,14 @@ struct Twins<'a> {
 /// place apart).
 pub const TWIN_TOLERANCE: f64 = 1e-9;
 
+/// A crack's sides count as laid on each other, and its points as one, within this share of
+/// the outline's extent (in UV and in 3D): a T-junction rounded to single precision is off its
+/// edge by about 1e-7 of the part's size; the flatness a chart is laid as it is within is 1e-6
+/// ([`crate::methods::planar`]).
+pub const CRACK_TOLERANCE: f64 = 1e-6;
+
 impl<'a> Twins<'a> {
-    fn new(positions: &[[f64; 3]], triangles: &'a [[u32; 3]], uv: &'a [[f64; 2]], loops: &[Vec<u32>]) -> Self {
+    fn new(positions: &'a [[f64; 3]], triangles: &'a [[u32; 3]], uv: &'a [[f64; 2]], loops: &[Vec<u32>]) -> Self {
         let mut key = vec![u32::MAX; positions.len()];
         let mut outline: Vec<u32> =
             loops.iter().flatten().copied().filter(|&v| (v as usize) < positions.len()).collect();
@@ -79,13 +103,20 @@ impl<'a> Twins<'a> {
             }
         }
         let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        let (mut lo3, mut hi3) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
         for &v in &outline {
             let p = uv[v as usize];
             lo = [lo[0].min(p[0]), lo[1].min(p[1])];
             hi = [hi[0].max(p[0]), hi[1].max(p[1])];
+            let q = positions[v as usize];
+            lo3 = std::array::from_fn(|k| lo3[k].min(q[k]));
+            hi3 = std::array::from_fn(|k| hi3[k].max(q[k]));
         }
-        let tolerance = TWIN_TOLERANCE * (hi[0] - lo[0]).max(hi[1] - lo[1]).max(0.0);
-        Twins { triangles, uv, key, around: std::sync::OnceLock::new(), tolerance }
+        let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(0.0);
+        let extent3 = (0..3).map(|k| hi3[k] - lo3[k]).fold(0.0, f64::max);
+        let tolerance = TWIN_TOLERANCE * extent;
+        let crack = [CRACK_TOLERANCE * extent, CRACK_TOLERANCE * extent3];
+        Twins { positions, triangles, uv, key, around: std::sync::OnceLock::new(), tolerance, crack }
     }
 
     /// Two different copies of one 3D vertex at the same UV (within the tolerance).
@@ -95,9 +126,57 @@ impl<'a> Twins<'a> {
         a != b && ka != u32::MAX && ka == kb && (p[0] - q[0]).abs().max((p[1] - q[1]).abs()) <= self.tolerance
     }
 
-    /// Whether segments `s` and `t` (no chart vertex in common; they cross or touch) meet
-    /// only along a closed seam (see the module docs).
+    /// Whether segments `s` and `t` (they cross or touch, or follow each other and fold back)
+    /// meet only along a closed seam or a crack (see the module docs).
     fn benign(&self, s: [u32; 2], t: [u32; 2]) -> bool {
+        self.closed_seam(s, t) || self.crack(s, t)
+    }
+
+    /// Whether `s` and `t` touch only where the mesh has a crack laid closed (module docs).
+    fn crack(&self, s: [u32; 2], t: [u32; 2]) -> bool {
+        let [tol_uv, tol_3d] = self.crack;
+        let mut touches = false;
+        for (x, y) in [(s, t), (t, s)] {
+            for e in x {
+                if y.contains(&e) {
+                    continue;
+                }
+                let key = self.key[e as usize];
+                if key != u32::MAX && y.iter().any(|&w| self.key[w as usize] == key) {
+                    // Copies of one cut vertex: a seam, held to [`TWIN_TOLERANCE`].
+                    return false;
+                }
+                let (p, a, b) = (self.uv[e as usize], self.uv[y[0] as usize], self.uv[y[1] as usize]);
+                let d = [b[0] - a[0], b[1] - a[1]];
+                let len2 = d[0] * d[0] + d[1] * d[1];
+                if !(len2 > 0.0) {
+                    return false;
+                }
+                let share = (((p[0] - a[0]) * d[0] + (p[1] - a[1]) * d[1]) / len2).clamp(0.0, 1.0);
+                let off = (a[0] + share * d[0] - p[0]).hypot(a[1] + share * d[1] - p[1]);
+                if off > tol_uv {
+                    continue;
+                }
+                let q = self.positions[e as usize];
+                let (qa, qb) = (self.positions[y[0] as usize], self.positions[y[1] as usize]);
+                let apart = (0..3).map(|k| qa[k] + share * (qb[k] - qa[k]) - q[k]).map(|x| x * x).sum::<f64>().sqrt();
+                if !(apart <= tol_3d) {
+                    return false;
+                }
+                touches = true;
+                if y.iter().any(|&w| self.fans_overlap_by(e, w, tol_uv)) {
+                    return false;
+                }
+            }
+        }
+        touches
+    }
+
+    /// Whether `s` and `t` (no chart vertex in common) meet only along a closed seam.
+    fn closed_seam(&self, s: [u32; 2], t: [u32; 2]) -> bool {
+        if s.iter().any(|v| t.contains(v)) {
+            return false;
+        }
         let meet: Vec<(u32, u32)> =
             s.iter().flat_map(|&a| t.iter().map(move |&b| (a, b))).filter(|&(a, b)| self.twins(a, b)).collect();
         let contact = match meet.len() {
@@ -120,6 +199,11 @@ impl<'a> Twins<'a> {
     /// Whether a triangle around `a` and one around `b` overlap (interiors, by separating
     /// axes; triangles that share only an edge or a point do not).
     fn fans_overlap(&self, a: u32, b: u32) -> bool {
+        self.fans_overlap_by(a, b, self.tolerance)
+    }
+
+    /// [`Self::fans_overlap`] by more than `tol`.
+    fn fans_overlap_by(&self, a: u32, b: u32, tol: f64) -> bool {
         let (start, ids) = self.around.get_or_init(|| {
             let n = self.uv.len();
             let mut start = vec![0u32; n + 1];
@@ -143,7 +227,6 @@ impl<'a> Twins<'a> {
         });
         let fan = |v: u32| &ids[start[v as usize] as usize..start[v as usize + 1] as usize];
         let corners = |k: u32| self.triangles[k as usize].map(|v| self.uv[v as usize]);
-        let tol = self.tolerance;
         fan(a).iter().any(|&x| fan(b).iter().any(|&y| x != y && interiors_overlap(corners(x), corners(y), tol)))
     }
 }
@@ -259,6 +342,52 @@ mod tests {
         uv[6] = [0.0, 1.0];
         assert!(super::super::flipped_triangles(&tris, &uv).iter().any(|&f| f));
         assert!(outline_overlap(&pos, &tris, &uv, &loops));
+    }
+
+    /// The square [0, 2]² with a crack of zero width from its top edge down its middle to
+    /// (1, 1): the crack's right side is one edge (1, 2)–(1, 1), its left side goes back up to
+    /// (1, 1.5) only and leaves for the corner (0, 2) from there: a T-junction at (1, 1.5), as
+    /// where a glyph's contours touch. Positions, triangles, the one outline.
+    fn cracked_square() -> (Vec<[f64; 3]>, Vec<[u32; 3]>, Vec<Vec<u32>>) {
+        let pos = vec![
+            [0.0, 0.0, 0.0],
+            [2.0, 0.0, 0.0],
+            [2.0, 2.0, 0.0],
+            [1.0, 2.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [1.0, 1.5, 0.0],
+            [0.0, 2.0, 0.0],
+        ];
+        let tris = vec![[1, 2, 3], [1, 3, 4], [0, 1, 4], [0, 4, 5], [0, 5, 6]];
+        (pos, tris, vec![vec![0, 1, 2, 3, 4, 5, 6]])
+    }
+
+    #[test]
+    fn a_crack_laid_closed_is_no_overlap_unless_its_sides_are_different_points() {
+        let (pos, tris, loops) = cracked_square();
+        let uv = uv_of(&pos);
+        assert!(super::super::flipped_triangles(&tris, &uv).iter().all(|&f| !f));
+        // The plain check sees the crack's sides fold back and touch.
+        assert!(super::super::boundary_self_overlap(&uv, &loops));
+        assert!(!outline_overlap(&pos, &tris, &uv, &loops));
+        // The T-junction off its edge by single-precision rounding, in 3D and in UV (to either
+        // side): still one point.
+        for dx in [1e-8, -1e-8] {
+            let (mut p, mut u) = (pos.clone(), uv.clone());
+            p[5][0] += dx;
+            u[5][0] += dx;
+            assert!(!outline_overlap(&p, &tris, &u, &loops), "{dx}");
+        }
+        // The same UVs with the left side lifted off the right one in 3D: a different surface
+        // point touches the edge.
+        let mut lifted = pos.clone();
+        lifted[5][2] = 1e-3;
+        assert!(outline_overlap(&lifted, &tris, &uv, &loops));
+        // The T-junction pushed across the edge, in 3D and in UV: the outline crosses itself.
+        let (mut p, mut u) = (pos.clone(), uv.clone());
+        p[5][0] += 1e-3;
+        u[5][0] += 1e-3;
+        assert!(outline_overlap(&p, &tris, &u, &loops));
     }
 
     #[test]

@@ -464,8 +464,9 @@ fn boundary_crossings_with(uv: &[[f64; 2]], loops: &[Vec<u32>], brute_force: usi
     boundary_crossings_except(uv, loops, brute_force, limit, &|_, _| false)
 }
 
-/// [`boundary_crossings_with`], leaving out the pairs of segments without a chart vertex in
-/// common that `benign` accepts (it is asked only about pairs that cross or touch).
+/// [`boundary_crossings_with`], leaving out the pairs of segments that `benign` accepts (it is
+/// asked only about pairs that cross or touch, and about consecutive segments that fold back
+/// onto each other).
 pub(crate) fn boundary_crossings_except(
     uv: &[[f64; 2]],
     loops: &[Vec<u32>],
@@ -518,7 +519,8 @@ pub(crate) fn boundary_crossings_except(
             };
             let u = [a[0] - o[0], a[1] - o[1]];
             let v = [b[0] - o[0], b[1] - o[1]];
-            return cross2(u, v) == 0.0 && u[0] * v[0] + u[1] * v[1] > 0.0;
+            let folds = cross2(u, v) == 0.0 && u[0] * v[0] + u[1] * v[1] > 0.0;
+            return folds && !benign([s.0, s.1], [t.0, t.1]);
         }
         segments_intersect(p1, p2, p3, p4) && !benign([s.0, s.1], [t.0, t.1])
     };
