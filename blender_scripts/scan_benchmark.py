@@ -165,6 +165,7 @@ def main(argv=None):
                               f"({p['repair_rounds']} rounds, {p['repair_pieces']} pieces, "
                               f"{p['splits']} splits ({p.get('predicted_splits', 0)} before any solve, "
                               f"{p.get('far_splits', 0)} after one), "
+                              f"{p.get('parts', 0)} rounds in parts, "
                               f"{p.get('peels', 0)} peels, {p.get('last_resort', 0)} last-resort solves, "
                               f"{p.get('glued', 0)} small islands glued)")
         print("\n".join(lines[-len(rows):]), flush=True)

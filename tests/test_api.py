@@ -1545,7 +1545,8 @@ def test_phases_account_for_the_pipeline():
     parts = {"cut_state", "cone_placement", "split_plans", "cut_graphs"}
     assert set(p) == {"build_charts", "plan_cuts", "solve", "repair_solve", "measure",
                       "predicted_rounds", "repair_rounds", "repair_pieces", "splits", "predicted_splits",
-                      "far_splits", "crease_cuts", "peels", "last_resort", "glue", "glued"} | parts
+                      "far_splits", "crease_cuts", "parts", "peels", "last_resort", "glue",
+                      "glued"} | parts
     assert all(v >= 0 for v in p.values())
     # The parts of plan_cuts add up to it; a cube planned on the prediction has cutting state,
     # placed cones and cut graphs.

@@ -7,7 +7,9 @@
 
 mod common;
 
-use common::{assert_islands_keep_the_rule, load, shared_meshes, subdivide, with_holes, Soup};
+use common::{
+    assert_islands_keep_the_rule, assert_same_on_one_thread, load, shared_meshes, subdivide, with_holes, Soup,
+};
 use uvflat_core::{unwrap, ChartStatus, Method, UnwrapOptions, Unwrapped};
 
 /// The bunny subdivided twice (111,456 triangles, above the peel's threshold) with 100 holes
@@ -43,11 +45,7 @@ fn abf_keeps_its_map_of_a_scan_with_a_hundred_holes_where_it_is_sound() {
     let r = unwrap(&s.input(), &options).unwrap();
     check(&s, "abf", &r);
     // The same on one thread, to the bit.
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
-    let one = pool.install(|| unwrap(&s.input(), &options).unwrap());
-    assert_eq!(one.new_seams, r.new_seams);
-    let bits = |uv: &[[f64; 2]]| uv.iter().flat_map(|p| [p[0].to_bits(), p[1].to_bits()]).collect::<Vec<u64>>();
-    assert!(bits(&one.uv) == bits(&r.uv), "the UVs differ on one thread");
+    assert_same_on_one_thread(&s, &options, &r);
 }
 
 /// On seed 4 the overlapping sides of `slim`'s map take 21% of the chart: the patch is peeled

@@ -199,7 +199,8 @@ impl PyUnwrapResult {
     /// cut along their creases first), ``predicted_splits`` (splits made
     /// before any solve, the chart's predicted mean area distortion being too high),
     /// ``far_splits`` (charts split after one solve, the method's map being far from a plan
-    /// predicted to keep the rule),
+    /// predicted to keep the rule), ``parts`` (repair rounds whose pieces of 150,000 triangles
+    /// or more were cut into parts solved side by side),
     /// ``peels`` (large pieces whose outline crossed itself, made valid by making the faces
     /// there islands of their own), ``last_resort`` (solves of the last
     /// resort, the method's flip-free kin then ``scaffold``, for pieces whose repair still broke
@@ -225,6 +226,7 @@ impl PyUnwrapResult {
         d.set_item("crease_cuts", p.crease_cuts)?;
         d.set_item("predicted_splits", p.predicted_splits)?;
         d.set_item("far_splits", p.far_splits)?;
+        d.set_item("parts", p.parts)?;
         d.set_item("peels", p.peels)?;
         d.set_item("last_resort", p.last_resort)?;
         d.set_item("glue", p.glue)?;

@@ -55,6 +55,22 @@ pub fn polygon_normals(chart: &Chart, polygons: &[Vec<u32>]) -> Vec<[f64; 3]> {
 }
 
 impl ChartGraph {
+    /// The edges flagged in `cut` (one flag per edge) as sorted mesh vertex pairs of `chart`
+    /// (the chart this graph was made of): the seams a cut adds.
+    pub fn mesh_seams(&self, chart: &Chart, cut: &[bool]) -> Vec<[u32; 2]> {
+        let mut seams: Vec<[u32; 2]> = (0..self.edges.len())
+            .filter(|&e| cut[e])
+            .map(|e| {
+                let [a, b] = self.edges[e];
+                let (ma, mb) = (chart.mesh_vertex[a as usize], chart.mesh_vertex[b as usize]);
+                [ma.min(mb), ma.max(mb)]
+            })
+            .collect();
+        seams.sort_unstable();
+        seams.dedup();
+        seams
+    }
+
     /// Build the graph of `chart`, whose faces are polygons of `mesh`.
     pub fn new(mesh: &PolyMesh<'_>, chart: &Chart) -> ChartGraph {
         let polygons = face_polygons(mesh, chart);

@@ -284,6 +284,8 @@ pub struct ChartCutter<'a> {
     loops: std::sync::Mutex<Option<(u32, Vec<bool>)>>,
     /// The coarse proxy of a large chart ([`coarse`]), made on first use.
     proxy: std::sync::OnceLock<Option<coarse::Proxy>>,
+    /// The chart's Fiedler vector ([`Self::fiedler`]), made on first use.
+    fiedler: std::sync::OnceLock<Option<Vec<f64>>>,
 }
 
 impl<'a> ChartCutter<'a> {
@@ -382,6 +384,7 @@ impl<'a> ChartCutter<'a> {
             mirror,
             loops: Default::default(),
             proxy: Default::default(),
+            fiedler: Default::default(),
         }
     }
 
@@ -465,8 +468,19 @@ impl<'a> ChartCutter<'a> {
     /// only the first (the planar split is made only when the spectral one fails: 0.36–0.44 s
     /// on fertility subdivided three times, 576k triangles).
     pub fn split_candidates(&self, avoid: &[bool], all: bool) -> Vec<Vec<[u32; 2]>> {
-        let fiedler = self.proxy().and_then(|p| Some(p.to_chart(&fiedler::fiedler_vector(&p.chart)?, &[])));
+        let fiedler = if self.proxy().is_some() { self.fiedler().map(<[f64]>::to_vec) } else { None };
         split::candidates_with(&self.graph, &self.cost, self.chart, avoid, fiedler, all)
+    }
+
+    /// The chart's Fiedler vector (per chart vertex), read from its proxy when it has one
+    /// ([`Self::proxy`]), as [`Self::split_candidates`] reads it; made once.
+    pub fn fiedler(&self) -> Option<&[f64]> {
+        self.fiedler
+            .get_or_init(|| match self.proxy() {
+                Some(p) => Some(p.to_chart(&fiedler::fiedler_vector(&p.chart)?, &[])),
+                None => fiedler::fiedler_vector(self.chart),
+            })
+            .as_deref()
     }
 
     /// This cutter with `proxy` as the chart's proxy, whatever the chart's size (made by the

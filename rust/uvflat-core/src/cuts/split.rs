@@ -135,8 +135,38 @@ pub fn spectral_halve(graph: &ChartGraph, cost: &[f64], chart: &Chart) -> Option
 
 /// [`spectral_halve`] along the levels of `f`, a Fiedler vector of the chart (per vertex).
 fn spectral_halve_of(graph: &ChartGraph, cost: &[f64], chart: &Chart, f: &[f64]) -> Option<Split> {
+    if cost.len() != graph.edges.len() {
+        return None;
+    }
+    let (quantile, area, total) = quantiles(graph, chart, f)?;
+    let neighbours = dual_adjacency(graph);
     let np = graph.polygons.len();
-    if np < SPECTRAL_MIN_POLYGONS || cost.len() != graph.edges.len() || f.len() != chart.positions.len() {
+    let band = BAND.min(BAND_POLYGONS as f64 / np as f64);
+    // The levels' cuts are independent: computed in parallel, compared in level order.
+    let splits: Vec<Option<Split>> = {
+        use rayon::prelude::*;
+        LEVELS
+            .par_iter()
+            .map(|&q| cut_at_level(graph, cost, chart, &quantile, &area, total, &neighbours, q, band))
+            .collect()
+    };
+    let mut best: Option<(bool, f64, Split)> = None;
+    for split in splits {
+        let Some(split) = split else { continue };
+        let key = (split.parts != 2, split.cost * (1.0 + (split.area_share - 0.5).abs()));
+        if best.as_ref().is_none_or(|b| (key.0, key.1) < (b.0, b.1)) {
+            best = Some((key.0, key.1, split));
+        }
+    }
+    best.map(|b| b.2)
+}
+
+/// Per polygon of `graph`, its area quantile in the order of `f` (the mean over its corners;
+/// step 1 of the module docs), with the polygons' areas and their total; `None` when the chart
+/// is too small, `f`'s length does not match, or the area is not positive.
+fn quantiles(graph: &ChartGraph, chart: &Chart, f: &[f64]) -> Option<(Vec<f64>, Vec<f64>, f64)> {
+    let np = graph.polygons.len();
+    if np < SPECTRAL_MIN_POLYGONS || f.len() != chart.positions.len() {
         return None;
     }
     let value: Vec<f64> = graph
@@ -157,25 +187,11 @@ fn spectral_halve_of(graph: &ChartGraph, cost: &[f64], chart: &Chart, f: &[f64])
         quantile[p] = (below + 0.5 * area[p]) / total;
         below += area[p];
     }
-    let neighbours = dual_adjacency(graph);
-    // The levels' cuts are independent: computed in parallel, compared in level order.
-    let splits: Vec<Option<Split>> = {
-        use rayon::prelude::*;
-        LEVELS.par_iter().map(|&q| cut_at_level(graph, cost, chart, &quantile, &area, total, &neighbours, q)).collect()
-    };
-    let mut best: Option<(bool, f64, Split)> = None;
-    for split in splits {
-        let Some(split) = split else { continue };
-        let key = (split.parts != 2, split.cost * (1.0 + (split.area_share - 0.5).abs()));
-        if best.as_ref().is_none_or(|b| (key.0, key.1) < (b.0, b.1)) {
-            best = Some((key.0, key.1, split));
-        }
-    }
-    best.map(|b| b.2)
+    Some((quantile, area, total))
 }
 
-/// The minimum cut of the band around level `q` (step 2), or `None` if a side is empty or the
-/// band cannot be cut at a finite cost.
+/// The minimum cut of the band (of area share `band`) around level `q` (step 2), or `None` if
+/// a side is empty or the band cannot be cut at a finite cost.
 #[allow(clippy::too_many_arguments)]
 fn cut_at_level(
     graph: &ChartGraph,
@@ -186,9 +202,9 @@ fn cut_at_level(
     total: f64,
     neighbours: &[Vec<u32>],
     q: f64,
+    band: f64,
 ) -> Option<Split> {
     let np = quantile.len();
-    let band = BAND.min(BAND_POLYGONS as f64 / np.max(1) as f64);
     let (lo, hi) = (q - 0.5 * band, q + 0.5 * band);
     // Nodes: 0 the low side, 1 the high side, 2.. the band's polygons.
     let mut node = vec![0u32; np];

@@ -160,17 +160,7 @@ pub fn crease_seams(ctx: &Context<'_, '_>, chart: &Chart) -> Option<Vec<[u32; 2]
             }
         }
     }
-    let mut seams: Vec<[u32; 2]> = (0..graph.edges.len())
-        .filter(|&e| cut[e])
-        .map(|e| {
-            let [a, b] = graph.edges[e];
-            let (ma, mb) = (chart.mesh_vertex[a as usize], chart.mesh_vertex[b as usize]);
-            [ma.min(mb), ma.max(mb)]
-        })
-        .collect();
-    seams.sort_unstable();
-    seams.dedup();
-    Some(seams)
+    Some(graph.mesh_seams(chart, &cut))
 }
 
 /// Leave uncut the creases that join the side faces of an extrusion into one band, so its

@@ -43,6 +43,7 @@ pub mod creases;
 pub mod glue;
 pub mod last_resort;
 pub mod outcome;
+pub mod parts;
 pub mod peel;
 pub mod phases;
 pub mod predict;

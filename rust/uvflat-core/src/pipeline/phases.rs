@@ -45,6 +45,9 @@ pub struct Phases {
     /// Charts sent to the split after their first solve, the method's map being far from a
     /// plan whose prediction kept the rule ([`crate::pipeline::repair::FAR_FROM_PLAN`]).
     pub far_splits: usize,
+    /// Repair rounds whose large pieces were cut into parts before the solve
+    /// ([`crate::pipeline::parts`]; the part seams' time is in `cut_graphs`).
+    pub parts: usize,
     /// Pieces whose outline crossed itself made valid by peeling the faces at the crossings
     /// into islands of their own ([`crate::pipeline::peel`]).
     pub peels: usize,

@@ -73,8 +73,7 @@ fn with_proxy_beside<'a>(
     chart: &'a Chart,
     make: impl FnOnce() -> ChartCutter<'a> + Send,
 ) -> ChartCutter<'a> {
-    let beside = cuts::coarse::wants_proxy(chart)
-        && ctx.plans_on_prediction()
+    let beside = (cuts::coarse::wants_proxy(chart) && ctx.plans_on_prediction() || super::parts::wanted(ctx, chart))
         && ctx.options.auto_seams.symmetry == cuts::symmetry::Symmetry::None;
     if !beside {
         return make();
@@ -172,13 +171,20 @@ pub fn repair<'a>(
     });
     let plan_kept = plan.as_ref().is_some_and(|p| p.keeps_rule);
     let mut planned = plan.and_then(|p| p.cut);
-    for round in 0..=rounds {
+    // The parts of a large chart's pieces ([`super::parts`]), cut in the first round and kept.
+    let mut parts: Option<Vec<[u32; 2]>> = None;
+    // One more round when a round cut into parts is solved again whole.
+    let mut again = 0;
+    for round in 0..=rounds + 1 {
+        if round > rounds + again {
+            break;
+        }
         if crate::progress::cancelled() {
             // The unwrap is discarded: no more solves.
             return best;
         }
         let t = std::time::Instant::now();
-        let cut = match planned.take() {
+        let mut cut = match planned.take() {
             Some(cut) => cut,
             None => cutter.cut(&seed, round),
         };
@@ -187,7 +193,30 @@ pub fn repair<'a>(
         }
         let mut all: Vec<[u32; 2]> = base_seams.to_vec();
         all.extend_from_slice(&cut.seams);
-        let sub = build_charts_with(ctx.mesh, &all, Some(&mask), ctx.render);
+        // The round's cut as planned, before any parts.
+        let uncut = cut.clone();
+        let mut with_parts = false;
+        let mut sub = build_charts_with(ctx.mesh, &all, Some(&mask), ctx.render);
+        if super::parts::wanted(ctx, chart) {
+            // Pieces too large to solve well as one are cut into parts (once per chart, the
+            // same parts every round), and parts that came out rings opened.
+            let parts = parts.get_or_insert_with(|| super::parts::part_seams(ctx, chart, &cutter, &all, &mask, &sub));
+            if !parts.is_empty() {
+                let mut extra = parts.clone();
+                all.extend_from_slice(&extra);
+                sub = build_charts_with(ctx.mesh, &all, Some(&mask), ctx.render);
+                let rings = super::parts::open_rings(ctx, &sub);
+                if !rings.is_empty() {
+                    all.extend_from_slice(&rings);
+                    extra.extend_from_slice(&rings);
+                    sub = build_charts_with(ctx.mesh, &all, Some(&mask), ctx.render);
+                }
+                ctx.clock.add(|p| p.parts += 1);
+                cut.length += split_length(ctx.mesh, &extra);
+                cut.seams.extend_from_slice(&extra);
+                with_parts = true;
+            }
+        }
         for c in &sub {
             c.inherit_vertex_order(chart);
         }
@@ -200,10 +229,27 @@ pub fn repair<'a>(
         let t = std::time::Instant::now();
         let n_pieces = sub.len();
         let mut pieces: Vec<Piece> = Vec::with_capacity(sub.len());
-        for (k, c) in sub.into_iter().enumerate() {
+        // Parts side by side (the unwrap's progress goes with them, so a cancel reaches their
+        // solves); other pieces in turn.
+        let solve = |c: Chart| {
+            let r = solve_chart(&c, ctx.pins, ctx.options, &ctx.rule);
+            (c, r)
+        };
+        let solved: Vec<_> = if with_parts {
+            use rayon::prelude::*;
+            let progress = crate::progress::current();
+            sub.into_par_iter()
+                .map(|c| {
+                    let _guard = progress.as_ref().map(|p| p.enter());
+                    solve(c)
+                })
+                .collect()
+        } else {
+            sub.into_iter().map(solve).collect()
+        };
+        for (k, (c, (mut report, uv, face_flips))) in solved.into_iter().enumerate() {
             // A piece the cut did not open (it should not happen) breaks the rule and is
             // repaired or split like any other.
-            let (mut report, uv, face_flips) = solve_chart(&c, ctx.pins, ctx.options, &ctx.rule);
             let seams = if k == 0 {
                 report.cones = cut.cones.len();
                 report.cut_length = cut.length;
@@ -214,8 +260,10 @@ pub fn repair<'a>(
             pieces.push(Piece::new(Some(c), report, uv, face_flips, seams));
         }
         // A large piece whose outline crosses itself at a few places keeps its map: the
-        // faces there become islands of their own ([`super::peel`]).
-        super::peel::apply(ctx, chart, base_seams, &mut pieces);
+        // faces there become islands of their own ([`super::peel`]); parts of a chart cut
+        // into parts count as large.
+        let peel_from = if with_parts { super::parts::PART_FROM / 8 } else { super::peel::PEEL_FROM };
+        super::peel::apply_from(ctx, chart, base_seams, &mut pieces, peel_from);
         ctx.clock.add(|p| {
             p.repair_solve += t.elapsed().as_secs_f64();
             p.repair_pieces += n_pieces;
@@ -242,6 +290,15 @@ pub fn repair<'a>(
         }
         if valid {
             break;
+        }
+        if with_parts {
+            // A part broke the rule where its piece, solved whole, may keep it (the rule
+            // weighs each island's density against its own mean): the same cut again, solved
+            // whole, and no parts from here on.
+            parts = Some(Vec::new());
+            planned = Some(uncut);
+            again = 1;
+            continue;
         }
         if far {
             // The plan's flattening keeps the rule and the method's map is far from it (a
@@ -574,7 +631,7 @@ pub(crate) fn crushed_regions(original: &Chart, chart: &Chart, ratios: &[(f64, f
 }
 
 /// Piece vertex → vertex of `original` through the shared corners (`u32::MAX`: none).
-fn piece_to_original(original: &Chart, chart: &Chart) -> Vec<u32> {
+pub(crate) fn piece_to_original(original: &Chart, chart: &Chart) -> Vec<u32> {
     if std::ptr::eq(original, chart) {
         return (0..chart.positions.len() as u32).collect();
     }

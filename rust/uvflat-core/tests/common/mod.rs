@@ -520,3 +520,12 @@ pub fn assert_islands_keep_the_rule(s: &Soup, what: &str, r: &uvflat_core::Unwra
     assert_eq!(charts.len(), r.charts.len(), "{what}: charts between the seams reported");
     assert_eq!(m.charts, r.charts.len(), "{what}: islands measured in UV");
 }
+
+/// `r` is what `options` give on `s` on one thread too, to the bit (seams and UVs).
+pub fn assert_same_on_one_thread(s: &Soup, options: &uvflat_core::UnwrapOptions, r: &uvflat_core::Unwrapped) {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+    let one = pool.install(|| uvflat_core::unwrap(&s.input(), options).unwrap());
+    assert_eq!(one.new_seams, r.new_seams);
+    let bits = |uv: &[[f64; 2]]| uv.iter().flat_map(|p| [p[0].to_bits(), p[1].to_bits()]).collect::<Vec<u64>>();
+    assert!(bits(&one.uv) == bits(&r.uv), "the UVs differ on one thread");
+}

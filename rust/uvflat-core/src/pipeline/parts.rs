@@ -1,0 +1,123 @@
+//! Parts: under a method that balances area, a piece of a cut too large to solve well as one
+//! is cut into parts along cheap seams before the solve, and the parts are solved side by side.
+//!
+//! A scan of half a million triangles comes out of its cones and cut as one or two pieces;
+//! SLIM's solve of a piece that size is most of the unwrap's time (12.0 s of 14.1 s on
+//! fertility subdivided three times, one piece of 568k triangles) and, as one solve, uses one
+//! core. Cut into parts of under [`PART_FROM`] triangles, each part's system costs less than
+//! its share (a sparse factorization costs more than linearly), and parts are solved in
+//! parallel: 3.1 s there, 7.8 s in all (docs/performance.md).
+//!
+//! A piece is halved along the level of the chart's Fiedler vector (read on its coarse proxy,
+//! once per chart: [`crate::cuts::ChartCutter::fiedler`]) at its half area, moved within a
+//! band to the cheapest loop or path by a minimum cut ([`crate::cuts::split`]), so the seams
+//! run along creases and hidden places like every other seam; a half still of [`PART_FROM`]
+//! triangles or more is halved again, at most [`MAX_PASSES`] times in all. A level that closes
+//! around inside its piece leaves a ring: it is opened like a hole ([`open_rings`]). The parts
+//! are cut once per chart: every repair round adds the same seams to its cut.
+//!
+//! A part holds its own share of its piece's stretch, measured against its own density, so it
+//! can break the rule where the piece solved whole would not: a round whose parts break it is
+//! solved again whole, and no parts are cut for that chart from then on. Parts whose outlines
+//! cross are peeled like large pieces ([`super::peel`], from an eighth of [`PART_FROM`]).
+//! Counted in `Phases::parts`. Deterministic: the seams depend on the chart and the round's
+//! cut only; parts are solved in piece order.
+
+use super::Context;
+use crate::charts::{build_charts_with, Chart};
+use crate::cuts::{self, ChartCutter};
+
+/// Pieces of at least this many triangles are cut into parts: fertility subdivided three
+/// times (one piece of 568k triangles under SLIM) comes out in 6 islands in 7.8 s, against 7
+/// islands in 7.7 s from 150,000, and 2 islands in 14.1 s without parts.
+pub const PART_FROM: usize = 250_000;
+
+/// Most passes of cutting parts (each halves the parts the one before left too large).
+pub const MAX_PASSES: usize = 3;
+
+/// Whether the pieces of `chart` are cut into parts: a chart of [`PART_FROM`] triangles or
+/// more, under a method that balances area ([`crate::Method::balances_area`]: SLIM, ARAP,
+/// scaffold). A conformal method's map puts a piece's stretch where its curvature is, so a
+/// part could hold more than 5% of its own area outside the bound where the whole piece held
+/// less (the bunny subdivided three times under `abf`: a part at 6.5%, the piece at 4.2%);
+/// their pieces are solved whole.
+pub fn wanted(ctx: &Context<'_, '_>, chart: &Chart) -> bool {
+    chart.triangles.len() >= PART_FROM && ctx.options.method.balances_area()
+}
+
+/// Seams (mesh vertex pairs) that cut the pieces of `chart` made by `seams` (the user's and
+/// the round's, over faces `mask`; `pieces`: those pieces, as built) into parts of under
+/// [`PART_FROM`] triangles; empty when every piece is smaller. A part may come out a ring
+/// ([`open_rings`]).
+pub fn part_seams(
+    ctx: &Context<'_, '_>,
+    chart: &Chart,
+    cutter: &ChartCutter<'_>,
+    seams: &[[u32; 2]],
+    mask: &[bool],
+    pieces: &[Chart],
+) -> Vec<[u32; 2]> {
+    if chart.triangles.len() < PART_FROM {
+        return Vec::new();
+    }
+    let Some(fiedler) = cutter.fiedler() else { return Vec::new() };
+    let mut out: Vec<[u32; 2]> = Vec::new();
+    let mut all: Vec<[u32; 2]> = seams.to_vec();
+    let mut built: Option<Vec<Chart>> = None;
+    for _ in 0..MAX_PASSES {
+        let pieces = built.as_deref().unwrap_or(pieces);
+        let large: Vec<&Chart> = pieces.iter().filter(|p| p.triangles.len() >= PART_FROM).collect();
+        if large.is_empty() {
+            break;
+        }
+        let cuts: Vec<Vec<[u32; 2]>> = {
+            use rayon::prelude::*;
+            large.par_iter().map(|p| cut_into_parts(ctx, chart, p, fiedler)).collect()
+        };
+        let before = out.len();
+        for c in cuts {
+            out.extend_from_slice(&c);
+            all.extend_from_slice(&c);
+        }
+        if out.len() == before {
+            break;
+        }
+        built = Some(build_charts_with(ctx.mesh, &all, Some(mask), ctx.render));
+    }
+    out
+}
+
+/// Seams that open every piece of `pieces` with more than one outline (a part whose level
+/// closed around inside its piece: a ring) by the cheapest path between its outlines, as a
+/// hole is joined to the outline.
+pub fn open_rings(ctx: &Context<'_, '_>, pieces: &[Chart]) -> Vec<[u32; 2]> {
+    let rings: Vec<&Chart> = pieces.iter().filter(|p| p.boundary_loops.len() > 1).collect();
+    let joins: Vec<Vec<[u32; 2]>> = {
+        use rayon::prelude::*;
+        rings.par_iter().map(|p| join_outlines(ctx, p)).collect()
+    };
+    joins.into_iter().flatten().collect()
+}
+
+/// The cheapest seams joining the outlines of `piece` into one.
+fn join_outlines(ctx: &Context<'_, '_>, piece: &Chart) -> Vec<[u32; 2]> {
+    let graph = cuts::graph::ChartGraph::new(ctx.mesh, piece);
+    let options = &ctx.options.auto_seams;
+    let cost = cuts::edge_costs_cached(ctx.mesh, &graph, piece, options, ctx.avoid, Some(&ctx.visibility));
+    let cut = cuts::cut_graph::join_and_prune(&graph, &cost, vec![false; graph.edges.len()], &[], &piece.boundary_loops);
+    graph.mesh_seams(piece, &cut)
+}
+
+/// The seams that halve `piece` (a piece of `chart`) near the half-area level of `fiedler`
+/// (per vertex of `chart`; [`crate::cuts::split`]), or none.
+fn cut_into_parts(ctx: &Context<'_, '_>, chart: &Chart, piece: &Chart, fiedler: &[f64]) -> Vec<[u32; 2]> {
+    let to_chart = super::repair::piece_to_original(chart, piece);
+    if to_chart.contains(&u32::MAX) {
+        return Vec::new();
+    }
+    let f: Vec<f64> = to_chart.iter().map(|&v| fiedler[v as usize]).collect();
+    let graph = cuts::graph::ChartGraph::new(ctx.mesh, piece);
+    let options = &ctx.options.auto_seams;
+    let cost = cuts::edge_costs_cached(ctx.mesh, &graph, piece, options, ctx.avoid, Some(&ctx.visibility));
+    cuts::split::candidates_with(&graph, &cost, piece, ctx.avoid, Some(f), false).into_iter().next().unwrap_or_default()
+}

@@ -1,0 +1,48 @@
+//! Parts (`pipeline/parts.rs`): under a method that balances area, a piece of a cut of
+//! `PART_FROM` triangles or more is cut into parts along cheap seams before the solve, and the
+//! parts are solved side by side. Every island keeps the atlas rule and is a disk, none is as
+//! large as the threshold, the seams reported are the islands', and the outcome is the same on
+//! one thread as on several. Conformal methods solve their pieces whole.
+
+mod common;
+
+use common::{assert_islands_keep_the_rule, assert_same_on_one_thread, sphere, Soup};
+use uvflat_core::pipeline::parts::PART_FROM;
+use uvflat_core::{unwrap, Method, UnwrapOptions};
+
+/// A closed UV sphere of 132,400 faces (quads, triangles at the poles: 264,000 triangles),
+/// stretched into an ellipsoid with a bump (smooth,
+/// its curvature uneven).
+fn large_closed() -> Soup {
+    let mut s = sphere(400, 331, |_| true);
+    for p in &mut s.positions {
+        let bump = 1.0 + 0.6 * (-8.0 * ((p[0] - 0.6).powi(2) + p[1].powi(2))).exp();
+        *p = [2.0 * bump * p[0], p[1], 0.6 * p[2]];
+    }
+    s
+}
+
+#[test]
+fn a_large_closed_chart_is_solved_in_parts_that_keep_the_rule_on_any_number_of_threads() {
+    let s = large_closed();
+    let triangles: usize = s.face_sizes.iter().map(|&n| n as usize - 2).sum();
+    assert!(triangles >= PART_FROM, "{triangles} triangles");
+    let options = UnwrapOptions { method: Method::Slim(Default::default()), ..Default::default() };
+    let r = unwrap(&s.input(), &options).unwrap();
+    assert!(r.phases.parts >= 1, "{:?}", r.phases);
+    assert_islands_keep_the_rule(&s, "slim", &r);
+    let largest = r.charts.iter().map(|c| c.triangles).max().unwrap();
+    assert!(largest < PART_FROM, "an island of {largest} triangles");
+    assert!(r.charts.len() <= 12, "{} islands", r.charts.len());
+    // The same on one thread, to the bit.
+    assert_same_on_one_thread(&s, &options, &r);
+}
+
+#[test]
+fn a_conformal_method_solves_its_pieces_whole() {
+    let s = large_closed();
+    let options = UnwrapOptions { method: Method::Abf(Default::default()), ..Default::default() };
+    let r = unwrap(&s.input(), &options).unwrap();
+    assert_eq!(r.phases.parts, 0, "{:?}", r.phases);
+    assert_islands_keep_the_rule(&s, "abf", &r);
+}
