@@ -47,8 +47,8 @@ pub fn wanted(ctx: &Context<'_, '_>, chart: &Chart) -> bool {
 
 /// Seams (mesh vertex pairs) that cut the pieces of `chart` made by `seams` (the user's and
 /// the round's, over faces `mask`; `pieces`: those pieces, as built) into parts of under
-/// [`PART_FROM`] triangles; empty when every piece is smaller. A part may come out a ring
-/// ([`open_rings`]).
+/// [`PART_FROM`] triangles, and the pieces cut along them too (when built on the way); no
+/// seams when every piece is smaller. A part may come out a ring ([`open_rings`]).
 pub fn part_seams(
     ctx: &Context<'_, '_>,
     chart: &Chart,
@@ -56,11 +56,11 @@ pub fn part_seams(
     seams: &[[u32; 2]],
     mask: &[bool],
     pieces: &[Chart],
-) -> Vec<[u32; 2]> {
+) -> (Vec<[u32; 2]>, Option<Vec<Chart>>) {
     if chart.triangles.len() < PART_FROM {
-        return Vec::new();
+        return (Vec::new(), None);
     }
-    let Some(fiedler) = cutter.fiedler() else { return Vec::new() };
+    let Some(fiedler) = cutter.fiedler() else { return (Vec::new(), None) };
     let mut out: Vec<[u32; 2]> = Vec::new();
     let mut all: Vec<[u32; 2]> = seams.to_vec();
     let mut built: Option<Vec<Chart>> = None;
@@ -84,7 +84,7 @@ pub fn part_seams(
         }
         built = Some(build_charts_with(ctx.mesh, &all, Some(mask), ctx.render));
     }
-    out
+    (out, built)
 }
 
 /// Seams that open every piece of `pieces` with more than one outline (a part whose level

@@ -200,11 +200,16 @@ pub fn repair<'a>(
         if super::parts::wanted(ctx, chart) {
             // Pieces too large to solve well as one are cut into parts (once per chart, the
             // same parts every round), and parts that came out rings opened.
-            let parts = parts.get_or_insert_with(|| super::parts::part_seams(ctx, chart, &cutter, &all, &mask, &sub));
+            let mut built = None;
+            let parts = parts.get_or_insert_with(|| {
+                let (seams, pieces) = super::parts::part_seams(ctx, chart, &cutter, &all, &mask, &sub);
+                built = pieces;
+                seams
+            });
             if !parts.is_empty() {
                 let mut extra = parts.clone();
                 all.extend_from_slice(&extra);
-                sub = build_charts_with(ctx.mesh, &all, Some(&mask), ctx.render);
+                sub = built.unwrap_or_else(|| build_charts_with(ctx.mesh, &all, Some(&mask), ctx.render));
                 let rings = super::parts::open_rings(ctx, &sub);
                 if !rings.is_empty() {
                     all.extend_from_slice(&rings);
