@@ -424,7 +424,16 @@ def test_a_perforated_plate_is_one_island_laid_as_it_is_through_the_operator(ext
     after = read(ext, obj)
     assert summary.seams_added == len(after.seams) > 0
     # Blender's own triangles (its n-gons are concave around the bores, so a fan from the first
-    # corner is no triangulation of them), on the UVs as Blender stores them: all positive.
+    # corner is no triangulation of them).
+    _assert_no_flip_on_blender_triangles(obj, after)
+
+
+def _assert_no_flip_on_blender_triangles(obj, after):
+    """Every one of Blender's `loop_triangles` of `obj` turns the same way on the UVs as
+    Blender stores them (`after`), and `uvflat.metrics` on those triangles finds no flip and no
+    island whose outline crosses itself."""
+    import uvflat
+
     me = obj.data
     me.calc_loop_triangles()
     tri = np.empty(3 * len(me.loop_triangles), dtype=np.int64)
@@ -432,7 +441,30 @@ def test_a_perforated_plate_is_one_island_laid_as_it_is_through_the_operator(ext
     a, b, c = (after.uv[tri[k::3]] for k in range(3))
     signed = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
     assert (signed > 0).all() or (signed < 0).all(), (signed > 0).sum()
-    import uvflat
-
     m = uvflat.metrics(after.positions, after.corner_verts, after.face_sizes, after.uv, triangles=tri.reshape(-1, 3))
     assert m.flips == 0 and m.overlapping_charts == 0, m
+
+
+def test_flat_glyphs_are_one_island_each_through_the_operator(ext, scene):
+    """Flat text converted to a mesh in Blender: the Q's tail touches its ring at a vertex on a
+    ring edge (a crack). Through the real operator each of the 7 glyph parts is one island laid
+    as it is, the Q too (before: invalid, its outline read as crossing itself), with no flip
+    on Blender's triangles."""
+    bpy.ops.object.text_add()
+    txt = bpy.context.active_object
+    txt.data.body = "OBAQ%"
+    bpy.ops.object.convert(target="MESH")
+    obj = bpy.context.active_object
+    obj.name = "Glyphs"
+    common.mesh_io().write_seams(obj.data, np.zeros(len(obj.data.edges), dtype=bool))
+    result, summary = unwrap(ext, [obj], method="abf")
+    assert result == {"FINISHED"} and not summary.failed, summary.line()
+    res = summary.results[obj.name]
+    assert np.asarray(res.face_solved).all()
+    assert len(res.charts) == 7, [(c.faces, c.reason) for c in res.charts]
+    for c in res.charts:
+        assert (c.status, c.method, c.iterations) == ("solved", "abf", 0), c.reason
+        assert c.conformal < 1 + 1e-6 and c.area < 1 + 1e-6, (c.conformal, c.area)
+    after = read(ext, obj)
+    assert summary.seams_added == len(after.seams) > 0  # the letters' holes joined
+    _assert_no_flip_on_blender_triangles(obj, after)
