@@ -35,5 +35,10 @@ fn main() {
     sizes.sort_unstable();
     let small = sizes.iter().filter(|&&n| n < 10).count();
     println!("islands under 10 faces: {small}, smallest {:?}", &sizes[..sizes.len().min(12)]);
+    let mut large: Vec<_> = r.charts.iter().filter(|c| c.faces >= 10_000).collect();
+    large.sort_by_key(|c| std::cmp::Reverse(c.faces));
+    for c in large {
+        println!("  island {} faces: {} iterations, {:.2} s solve", c.faces, c.iterations, c.seconds);
+    }
     println!("{:?}", r.phases);
 }

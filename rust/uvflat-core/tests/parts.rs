@@ -10,6 +10,17 @@ use common::{assert_islands_keep_the_rule, assert_same_on_one_thread, sphere, So
 use uvflat_core::pipeline::parts::PART_FROM;
 use uvflat_core::{unwrap, Method, UnwrapOptions};
 
+/// [`large_closed`] with its bottom cap cut off (the faces whose centroid lies below
+/// `z = -0.95` on the unit sphere, of a finer sphere): one disk of more than [`PART_FROM`] triangles.
+fn large_open() -> Soup {
+    let mut s = sphere(440, 331, |c| c[2] > -0.95);
+    for p in &mut s.positions {
+        let bump = 1.0 + 0.6 * (-8.0 * ((p[0] - 0.6).powi(2) + p[1].powi(2))).exp();
+        *p = [2.0 * bump * p[0], p[1], 0.6 * p[2]];
+    }
+    s
+}
+
 /// A closed UV sphere of 132,400 faces (quads, triangles at the poles: 264,000 triangles),
 /// stretched into an ellipsoid with a bump (smooth,
 /// its curvature uneven).
@@ -43,6 +54,27 @@ fn a_conformal_method_solves_its_pieces_whole() {
     let s = large_closed();
     let options = UnwrapOptions { method: Method::Abf(Default::default()), ..Default::default() };
     let r = unwrap(&s.input(), &options).unwrap();
+    assert_eq!(r.phases.parts, 0, "{:?}", r.phases);
+    assert_islands_keep_the_rule(&s, "abf", &r);
+}
+
+#[test]
+fn a_large_disk_is_cut_into_parts_before_any_solve() {
+    // Solved whole first, the disk's own solve was thrown away when it broke the rule (the
+    // camel's head subdivided twice: 7.6 s of 12.9 s).
+    let s = large_open();
+    let triangles: usize = s.face_sizes.iter().map(|&n| n as usize - 2).sum();
+    assert!(triangles >= PART_FROM, "{triangles} triangles");
+    let options = UnwrapOptions { method: Method::Slim(Default::default()), ..Default::default() };
+    let r = unwrap(&s.input(), &options).unwrap();
+    assert!(r.phases.parts >= 1, "{:?}", r.phases);
+    assert_eq!(r.phases.solve, 0.0, "the disk was solved whole first: {:?}", r.phases);
+    assert_islands_keep_the_rule(&s, "slim", &r);
+    let largest = r.charts.iter().map(|c| c.triangles).max().unwrap();
+    assert!(largest < PART_FROM, "an island of {largest} triangles");
+    // A conformal method still solves the disk as it is when it keeps the rule.
+    let abf = UnwrapOptions { method: Method::Abf(Default::default()), ..Default::default() };
+    let r = unwrap(&s.input(), &abf).unwrap();
     assert_eq!(r.phases.parts, 0, "{:?}", r.phases);
     assert_islands_keep_the_rule(&s, "abf", &r);
 }

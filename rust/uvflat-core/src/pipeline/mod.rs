@@ -166,7 +166,9 @@ fn road(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], depth: us
             return creases::regions(ctx, chart, base_seams, depth, &creases);
         }
     }
-    if road == Triage::Cut {
+    if road == Triage::Cut || (road == Triage::SolveThenRepair && parts::wanted(ctx, chart)) {
+        // A disk too large to solve well as one under a method that cuts parts is cut into
+        // parts before any solve ([`parts`]).
         return repair::repair(ctx, chart, base_seams, depth, None, None);
     }
     // The scale system of the prediction, kept for the cutter if the disk is cut.

@@ -186,6 +186,8 @@ pub fn repair<'a>(
         let t = std::time::Instant::now();
         let mut cut = match planned.take() {
             Some(cut) => cut,
+            // A chart cut into parts places its first cones on its proxy ([`super::parts`]).
+            None if round == 0 && super::parts::wanted(ctx, chart) => cutter.plan_cut(&seed, round),
             None => cutter.cut(&seed, round),
         };
         if cut.seams.is_empty() && !best.is_empty() {

@@ -8,7 +8,9 @@ pub enum Triage {
     /// Solve as it is and report (automatic seams off, a defect, no triangles, or a pinned
     /// disk: pins are the user's layout and are never cut).
     Solve,
-    /// Solve as it is; repair (cones, cuts, splits) only if the result breaks the rule.
+    /// Solve as it is; repair (cones, cuts, splits) only if the result breaks the rule. A
+    /// disk of [`super::parts::PART_FROM`] triangles or more under a method that cuts parts
+    /// ([`super::parts::wanted`]) goes to its parts before any solve.
     SolveThenRepair,
     /// Cut before solving: a closed chart, a chart with handles, or a chart with holes
     /// (holes are joined to the outline so the island is a disk).
