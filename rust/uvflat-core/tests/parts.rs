@@ -2,7 +2,9 @@
 //! `PART_FROM` triangles or more is cut into parts along cheap seams before the solve, and the
 //! parts are solved side by side. Every island keeps the atlas rule and is a disk, none is as
 //! large as the threshold, the seams reported are the islands', and the outcome is the same on
-//! one thread as on several. Conformal methods solve their pieces whole.
+//! one thread as on several. Conformal methods solve their pieces whole. A large disk goes to
+//! its parts before any solve when it is predicted to break the rule by far, and is solved
+//! whole when it flattens well.
 
 mod common;
 
@@ -60,8 +62,9 @@ fn a_conformal_method_solves_its_pieces_whole() {
 
 #[test]
 fn a_large_disk_is_cut_into_parts_before_any_solve() {
-    // Solved whole first, the disk's own solve was thrown away when it broke the rule (the
-    // camel's head subdivided twice: 7.6 s of 12.9 s).
+    // Its conformal flattening breaks Max Stretch by far. Solved whole first, the disk's own
+    // solve was thrown away when it broke the rule (the camel's head subdivided twice: 7.6 s
+    // of 12.9 s).
     let s = large_open();
     let triangles: usize = s.face_sizes.iter().map(|&n| n as usize - 2).sum();
     assert!(triangles >= PART_FROM, "{triangles} triangles");
@@ -77,4 +80,34 @@ fn a_large_disk_is_cut_into_parts_before_any_solve() {
     let r = unwrap(&s.input(), &abf).unwrap();
     assert_eq!(r.phases.parts, 0, "{:?}", r.phases);
     assert_islands_keep_the_rule(&s, "abf", &r);
+}
+
+#[test]
+fn a_large_disk_that_flattens_well_is_solved_whole() {
+    // A displaced grid of 302,642 triangles (a terrain patch): its conformal flattening keeps
+    // Max Stretch, so it is solved as it is, one island, not cut into parts.
+    let n = 390;
+    let mut positions = Vec::with_capacity(n * n);
+    for j in 0..n {
+        for i in 0..n {
+            let (x, y) = (4.0 * i as f64 / (n - 1) as f64, 4.0 * j as f64 / (n - 1) as f64);
+            positions.push([x, y, 0.15 * (3.0 * x).sin() * (2.0 * y).cos() + 0.05 * (11.0 * x + 3.0 * y).sin()]);
+        }
+    }
+    let id = |i: usize, j: usize| (j * n + i) as u32;
+    let mut faces = Vec::new();
+    for j in 0..n - 1 {
+        for i in 0..n - 1 {
+            faces.push(vec![id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+            faces.push(vec![id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+        }
+    }
+    let s = common::soup_of(positions, faces, |_| true);
+    assert!(s.face_sizes.len() >= PART_FROM);
+    let options = UnwrapOptions { method: Method::Slim(Default::default()), ..Default::default() };
+    let r = unwrap(&s.input(), &options).unwrap();
+    assert_eq!(r.charts.len(), 1, "{:?}", r.phases);
+    assert_eq!(r.phases.parts, 0, "{:?}", r.phases);
+    assert!(r.phases.solve > 0.0, "not solved whole: {:?}", r.phases);
+    assert_islands_keep_the_rule(&s, "slim", &r);
 }

@@ -26,9 +26,11 @@
 //! A chart that will be cut into parts is planned cheaply: its first round's cones are placed
 //! on its coarse proxy ([`crate::cuts::ChartCutter::plan_cut`]; the chart's own scale system
 //! is factored only if a later round needs it: the bunny subdivided three times, 7.6 → 6.4 s),
-//! and a disk of [`PART_FROM`] triangles or more goes to the parts before any solve instead
-//! of being solved whole first (the camel's head subdivided twice: its whole solve, 7.6 s, was
-//! thrown away when it broke the rule; 12.9 → 5.3 s, the same islands).
+//! and a disk of [`PART_FROM`] triangles or more whose conformal flattening is predicted to
+//! break Max Stretch by far ([`super::triage::PREDICTED_BREAK`]) goes to the parts before any
+//! solve instead of being solved whole first (the camel's head subdivided twice: its whole
+//! solve, 7.6 s, was thrown away when it broke the rule; 14.7 → 5.5 s, the same islands). A
+//! disk that flattens well (a terrain patch) is solved whole, one island.
 
 use super::Context;
 use crate::charts::{build_charts_with, Chart};
