@@ -15,19 +15,18 @@ use uvflat_core::{unwrap, Method, UnwrapOptions};
 /// [`large_closed`] with its bottom cap cut off (the faces whose centroid lies below
 /// `z = -0.95` on the unit sphere, of a finer sphere): one disk of more than [`PART_FROM`] triangles.
 fn large_open() -> Soup {
-    let mut s = sphere(440, 331, |c| c[2] > -0.95);
-    for p in &mut s.positions {
-        let bump = 1.0 + 0.6 * (-8.0 * ((p[0] - 0.6).powi(2) + p[1].powi(2))).exp();
-        *p = [2.0 * bump * p[0], p[1], 0.6 * p[2]];
-    }
-    s
+    ellipsoid_with_bump(sphere(440, 331, |c| c[2] > -0.95))
 }
 
 /// A closed UV sphere of 132,400 faces (quads, triangles at the poles: 264,000 triangles),
 /// stretched into an ellipsoid with a bump (smooth,
 /// its curvature uneven).
 fn large_closed() -> Soup {
-    let mut s = sphere(400, 331, |_| true);
+    ellipsoid_with_bump(sphere(400, 331, |_| true))
+}
+
+/// The unit sphere `s` stretched into an ellipsoid with a bump.
+fn ellipsoid_with_bump(mut s: Soup) -> Soup {
     for p in &mut s.positions {
         let bump = 1.0 + 0.6 * (-8.0 * ((p[0] - 0.6).powi(2) + p[1].powi(2))).exp();
         *p = [2.0 * bump * p[0], p[1], 0.6 * p[2]];

@@ -132,6 +132,21 @@ fn a_plan_predicted_above_the_mean_limit_is_split_before_any_solve() {
     assert_eq!(slim.phases.predicted_splits, 0);
 }
 
+#[test]
+fn a_plan_predicted_to_break_the_rule_is_split_before_its_solve() {
+    // The lion subdivided once (66,696 triangles, open): no plan of cones is predicted to
+    // keep the rule, and the one solve of the best plan broke it; the split comes first, its
+    // halves keep the rule, and the chart itself is never solved.
+    let Some(dir) = common::shared_meshes() else { return };
+    let s = common::subdivide(&common::load(&dir.join("lion.off")));
+    let options = UnwrapOptions { method: Method::Abf(abf::AbfOptions::default()), ..Default::default() };
+    let r = unwrap(&s.input(), &options).unwrap();
+    assert!(r.phases.predicted_splits >= 1, "{:?}", r.phases);
+    // Every solve is of an island kept: one round per island, none thrown away.
+    assert_eq!(r.phases.repair_rounds, r.charts.len(), "{:?}", r.phases);
+    common::assert_islands_keep_the_rule(&s, "abf", &r);
+}
+
 /// A method whose map is far from a plan that keeps the rule (LSCM's free boundary crushes
 /// regions the prediction does not) is split after its first solve: cones placed on the
 /// prediction do not bring such a map back. ABF's map follows the prediction and is never
