@@ -34,17 +34,24 @@ fn ellipsoid_with_bump(mut s: Soup) -> Soup {
     s
 }
 
-#[test]
-fn a_large_closed_chart_is_solved_in_parts_that_keep_the_rule_on_any_number_of_threads() {
-    let s = large_closed();
+/// `s` (of at least [`PART_FROM`] triangles) unwrapped under `slim`, with its options: cut
+/// into parts, every island keeps the rule and is smaller than the threshold.
+fn unwrap_in_parts(s: &Soup) -> (UnwrapOptions, uvflat_core::Unwrapped) {
     let triangles: usize = s.face_sizes.iter().map(|&n| n as usize - 2).sum();
     assert!(triangles >= PART_FROM, "{triangles} triangles");
     let options = UnwrapOptions { method: Method::Slim(Default::default()), ..Default::default() };
     let r = unwrap(&s.input(), &options).unwrap();
     assert!(r.phases.parts >= 1, "{:?}", r.phases);
-    assert_islands_keep_the_rule(&s, "slim", &r);
+    assert_islands_keep_the_rule(s, "slim", &r);
     let largest = r.charts.iter().map(|c| c.triangles).max().unwrap();
     assert!(largest < PART_FROM, "an island of {largest} triangles");
+    (options, r)
+}
+
+#[test]
+fn a_large_closed_chart_is_solved_in_parts_that_keep_the_rule_on_any_number_of_threads() {
+    let s = large_closed();
+    let (options, r) = unwrap_in_parts(&s);
     assert!(r.charts.len() <= 12, "{} islands", r.charts.len());
     // The same on one thread, to the bit.
     assert_same_on_one_thread(&s, &options, &r);
@@ -52,11 +59,15 @@ fn a_large_closed_chart_is_solved_in_parts_that_keep_the_rule_on_any_number_of_t
 
 #[test]
 fn a_conformal_method_solves_its_pieces_whole() {
-    let s = large_closed();
+    assert_no_parts_under_abf(&large_closed());
+}
+
+/// `s` unwrapped under `abf`: no part is cut, and every island keeps the rule.
+fn assert_no_parts_under_abf(s: &Soup) {
     let options = UnwrapOptions { method: Method::Abf(Default::default()), ..Default::default() };
     let r = unwrap(&s.input(), &options).unwrap();
     assert_eq!(r.phases.parts, 0, "{:?}", r.phases);
-    assert_islands_keep_the_rule(&s, "abf", &r);
+    assert_islands_keep_the_rule(s, "abf", &r);
 }
 
 #[test]
@@ -65,20 +76,10 @@ fn a_large_disk_is_cut_into_parts_before_any_solve() {
     // solve was thrown away when it broke the rule (the camel's head subdivided twice: 7.6 s
     // of 12.9 s).
     let s = large_open();
-    let triangles: usize = s.face_sizes.iter().map(|&n| n as usize - 2).sum();
-    assert!(triangles >= PART_FROM, "{triangles} triangles");
-    let options = UnwrapOptions { method: Method::Slim(Default::default()), ..Default::default() };
-    let r = unwrap(&s.input(), &options).unwrap();
-    assert!(r.phases.parts >= 1, "{:?}", r.phases);
+    let (_, r) = unwrap_in_parts(&s);
     assert_eq!(r.phases.solve, 0.0, "the disk was solved whole first: {:?}", r.phases);
-    assert_islands_keep_the_rule(&s, "slim", &r);
-    let largest = r.charts.iter().map(|c| c.triangles).max().unwrap();
-    assert!(largest < PART_FROM, "an island of {largest} triangles");
-    // A conformal method still solves the disk as it is when it keeps the rule.
-    let abf = UnwrapOptions { method: Method::Abf(Default::default()), ..Default::default() };
-    let r = unwrap(&s.input(), &abf).unwrap();
-    assert_eq!(r.phases.parts, 0, "{:?}", r.phases);
-    assert_islands_keep_the_rule(&s, "abf", &r);
+    // A conformal method cuts no parts (it solves the disk as it is when it keeps the rule).
+    assert_no_parts_under_abf(&s);
 }
 
 #[test]

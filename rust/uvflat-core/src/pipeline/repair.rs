@@ -141,20 +141,11 @@ pub fn repair<'a>(
         // stage weighs the same halves against it. (A plan that breaks the rule by a hair
         // with a mean above the limit, the bunny subdivided twice as the Rust examples make
         // it: its whole-chart solve, 1.2 s, was solved to be split.)
-        let t = std::time::Instant::now();
-        let list = cutter.split_candidates(ctx.avoid, last_level);
-        // The halves make their own cutting state; a later round factors this one again.
-        cutter.release_factors();
-        ctx.clock.add(|p| p.plan(t, |p| &mut p.split_plans));
-        if let Some(split) = list.first().filter(|s| !s.is_empty()).cloned() {
-            let out = halves(ctx, chart, base_seams, &mask, depth, &split);
-            ctx.clock.add(|p| p.predicted_splits += 1);
-            if all_valid(ctx, &out) && mean_area(&out) <= predicted_mean - MEAN_AREA_GAIN {
-                return out;
-            }
-            presplit = Some((split, out));
+        let keep = |out: &[Piece]| all_valid(ctx, out) && mean_area(out) <= predicted_mean - MEAN_AREA_GAIN;
+        match split_first(ctx, chart, &mut cutter, base_seams, &mask, depth, None, keep) {
+            Ok(out) => return out,
+            Err((list, pre)) => (candidates, presplit) = (Some(list), pre),
         }
-        candidates = Some(list);
     }
     if let Some(plan) = plan.as_mut().filter(|p| p.on_proxy) {
         // Read on the chart's proxy, left to here by the split that came first.
@@ -170,20 +161,11 @@ pub fn repair<'a>(
         // subdivided twice, 3.6 s; `lscm` on scans of 88k–267k triangles). The chart is split
         // first; its halves are kept when they keep the rule, else the solve follows and the
         // split stage weighs the same halves against it.
-        let t = std::time::Instant::now();
-        let list = candidates.take().unwrap_or_else(|| cutter.split_candidates(ctx.avoid, last_level));
-        // The halves make their own cutting state (the one solve left uses the planned cut).
-        cutter.release_factors();
-        ctx.clock.add(|p| p.plan(t, |p| &mut p.split_plans));
-        if let Some(split) = list.first().filter(|s| !s.is_empty()).cloned() {
-            let out = halves(ctx, chart, base_seams, &mask, depth, &split);
-            ctx.clock.add(|p| p.predicted_splits += 1);
-            if all_valid(ctx, &out) {
-                return out;
-            }
-            presplit = Some((split, out));
+        let made = candidates.take();
+        match split_first(ctx, chart, &mut cutter, base_seams, &mask, depth, made, |out| all_valid(ctx, out)) {
+            Ok(out) => return out,
+            Err((list, pre)) => (candidates, presplit) = (Some(list), pre),
         }
-        candidates = Some(list);
     }
     let rounds = plan.as_ref().map_or(cuts::REPAIR_ROUNDS, |p| {
         if p.keeps_rule || ctx.options.method.balances_area() {
@@ -409,6 +391,39 @@ pub fn repair<'a>(
         super::peel::apply_from(ctx, chart, base_seams, &mut best, 0);
     }
     best
+}
+
+/// The split's candidates, and the halves along the first with the seams they were cut along.
+type SplitTried = (Vec<Vec<[u32; 2]>>, Option<(Vec<[u32; 2]>, Vec<Piece>)>);
+
+/// A split of `chart` before any solve: the split's candidates (`made`, or made here from
+/// `cutter`, whose factors are freed: the halves make their own cutting state), and the
+/// halves along the first, each taken through the pipeline. `Ok` with the halves when `keep`
+/// takes them; otherwise the candidates and the halves tried, for the split stage to weigh
+/// after the chart's own solve.
+#[allow(clippy::too_many_arguments)]
+fn split_first(
+    ctx: &Context<'_, '_>,
+    chart: &Chart,
+    cutter: &mut ChartCutter<'_>,
+    base_seams: &[[u32; 2]],
+    mask: &[bool],
+    depth: usize,
+    made: Option<Vec<Vec<[u32; 2]>>>,
+    keep: impl Fn(&[Piece]) -> bool,
+) -> Result<Vec<Piece>, SplitTried> {
+    let t = std::time::Instant::now();
+    let last_level = depth + 1 == cuts::MAX_SPLIT_DEPTH;
+    let list = made.unwrap_or_else(|| cutter.split_candidates(ctx.avoid, last_level));
+    cutter.release_factors();
+    ctx.clock.add(|p| p.plan(t, |p| &mut p.split_plans));
+    let Some(split) = list.first().filter(|s| !s.is_empty()).cloned() else { return Err((list, None)) };
+    let out = halves(ctx, chart, base_seams, mask, depth, &split);
+    ctx.clock.add(|p| p.predicted_splits += 1);
+    if keep(&out) {
+        return Ok(out);
+    }
+    Err((list, Some((split, out))))
 }
 
 /// The halves of `chart` split along `split` (mesh vertex pairs), each taken through the
