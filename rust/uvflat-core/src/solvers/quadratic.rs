@@ -415,6 +415,50 @@ impl<T: Scalar> FixedValueSolver<T> {
         Self::new_with_dense_max(n, triplets, fixed, symmetry, dense_max(), ordering.into())
     }
 
+    /// [`FixedValueSolver::with_ordering`] for a system solved to the accuracy of a starting
+    /// map rather than to round-off: factored in single precision when the system is large
+    /// enough for it to pay ([`refined_llt::single_pays`]), whatever the ordering, and solved by
+    /// [`FixedValueSolver::solve_inexact`] or preconditioned by
+    /// [`FixedValueSolver::apply_factor`]. Preconditions and failures as
+    /// [`FixedValueSolver::new`].
+    pub fn approximate_with<'a>(
+        n: usize,
+        triplets: &[(u32, u32, T)],
+        fixed: &[u32],
+        symmetry: Symmetry,
+        ordering: impl Into<Ordering<'a>>,
+    ) -> Result<Self, SolveError> {
+        let mut solver = Self::analysed(n, triplets, fixed, symmetry, dense_max(), ordering.into())?;
+        let nf = solver.free.len();
+        if let Symbolic::Llt { state, .. } = &mut solver.symbolic {
+            let state = state.get_mut().unwrap_or_else(std::sync::PoisonError::into_inner);
+            state.factor = RefinedLlt::new(refined_llt::single_pays(nf));
+        }
+        solver.load_values(triplets.iter().map(|t| t.2));
+        solver.factor_loaded()?;
+        Ok(solver)
+    }
+
+    /// `Q_FF⁻¹ b_F` by one application of the factor in its precision (no refinement), the
+    /// fixed unknowns 0: a preconditioner. `b` has length n (its fixed entries are ignored).
+    /// Dense and LU factors solve directly. Failures: as [`FixedValueSolver::solve`].
+    pub fn apply_factor(&self, b: &[T]) -> Result<Vec<T>, SolveError> {
+        if let (Some(Factor::Llt), Symbolic::Llt { symbolic, state, .. }) = (&self.factor, &self.symbolic) {
+            let mut state = state.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+            let state = &mut *state;
+            let rhs: Vec<T> = self.free.iter().map(|&g| b[g as usize]).collect();
+            let mut y = vec![T::zero_value(); rhs.len()];
+            let par = faer::get_global_parallelism();
+            state.factor.precondition(symbolic, &rhs, &mut y, par, MemStack::new(&mut state.mem))?;
+            if !y.iter().all(|v| v.finite()) {
+                return Err(SolveError::NonFinite);
+            }
+            return Ok(self.full(&y, &vec![T::zero_value(); self.fixed.len()]));
+        }
+        let zeros = vec![vec![T::zero_value(); self.fixed.len()]];
+        Ok(self.solve(&zeros, &[b.to_vec()])?.pop().unwrap_or_default())
+    }
+
     /// [`FixedValueSolver::analyse`] with the given ordering (see
     /// [`FixedValueSolver::with_ordering`]).
     pub fn analyse_with<'a>(n: usize, triplets: &[(u32, u32, T)], fixed: &[u32], symmetry: Symmetry, ordering: impl Into<Ordering<'a>>) -> Result<Self, SolveError> {
@@ -895,6 +939,51 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// A system solved to a start's accuracy: [`FixedValueSolver::approximate_with`] factors a
+    /// large one in single precision whatever its ordering (`with_ordering` with AMD factors in
+    /// double), one [`FixedValueSolver::apply_factor`] is the exact solution to a few digits
+    /// with the fixed unknowns at 0, and [`FixedValueSolver::solve_inexact`] reaches the
+    /// double-precision solution to the asked accuracy.
+    #[test]
+    fn approximate_systems_factor_in_single_precision_and_apply_their_factor_once() {
+        use crate::solvers::refined_llt::{MIXED_MIN, SINGLE_FACTORIZATIONS};
+        // A weighted grid Laplacian with a small shift, the border fixed: above `MIXED_MIN`.
+        let (w, h) = (160usize, 110usize);
+        let n = w * h;
+        let mut t: Vec<(u32, u32, f64)> = (0..n as u32).map(|v| (v, v, 1e-3)).collect();
+        for j in 0..h {
+            for i in 0..w {
+                let v = (j * w + i) as u32;
+                for u in [(i + 1 < w).then(|| v + 1), (j + 1 < h).then(|| v + w as u32)].into_iter().flatten() {
+                    let wgt = 1.0 + ((v as usize * 7919) % 1000) as f64 / 1000.0;
+                    t.extend([(v, v, wgt), (u, u, wgt), (u.max(v), u.min(v), -wgt)]);
+                }
+            }
+        }
+        let fixed: Vec<u32> = (0..n as u32).filter(|&v| (v as usize) < w || (v as usize) % w == 0).collect();
+        assert!(n - fixed.len() >= MIXED_MIN);
+        let fv: Vec<f64> = fixed.iter().map(|&v| (v as f64 * 0.01).sin()).collect();
+        let b: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).cos()).collect();
+        let singles = || SINGLE_FACTORIZATIONS.with(|c| c.get());
+        let before = singles();
+        let exact = FixedValueSolver::with_ordering(n, &t, &fixed, Symmetry::Symmetric, OrderingKind::Amd).unwrap();
+        assert_eq!(singles(), before, "a system factored once with AMD is factored in double precision");
+        let approx = FixedValueSolver::approximate_with(n, &t, &fixed, Symmetry::Symmetric, OrderingKind::Amd).unwrap();
+        assert_eq!(singles(), before + 1, "not factored in single precision");
+        let x = exact.solve(&[fv.clone()], &[b.clone()]).unwrap().pop().unwrap();
+        let big = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let diff = |y: &[f64]| x.iter().zip(y).fold(0.0f64, |m, (p, q)| m.max((p - q).abs())) / big;
+        let y = approx.solve_inexact(&fv, &b, &vec![0.0; n], 1e-10).unwrap();
+        assert!(diff(&y) < 1e-8, "inexact solve {:e} from the exact one", diff(&y));
+        // Once, with the fixed unknowns at 0: the exact solution with zero fixed values.
+        let x0 = exact.solve(&[vec![0.0; fixed.len()]], &[b.clone()]).unwrap().pop().unwrap();
+        let once = approx.apply_factor(&b).unwrap();
+        let big0 = x0.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let d0 = x0.iter().zip(&once).fold(0.0f64, |m, (p, q)| m.max((p - q).abs())) / big0;
+        assert!(d0 > 0.0 && d0 < 1e-3, "one application of the single factor: {d0:e} from the exact solution");
+        assert!(fixed.iter().all(|&v| once[v as usize] == 0.0), "fixed unknowns not 0");
     }
 
     /// The dense Cholesky refuses a symmetric indefinite matrix, like the sparse one, and a

@@ -25,10 +25,16 @@
 //! factorization that meets a non-positive pivot, and a refinement that stops converging
 //! (a step that does not halve the residual, or more than [`MAX_STEPS`] steps: `A` too
 //! ill-conditioned for single precision) all switch to a double-precision factorization of the
-//! same matrix. After such a fallback the factor stays in double precision for every later
-//! factorization (a chart's systems keep their conditioning from one iteration to the next, so
-//! trying single precision again would pay both factorizations each time). Only a matrix that
-//! double precision cannot factor either fails ([`SolveError::NotPositiveDefinite`]).
+//! same matrix. After a second such fallback the factor stays in double precision for every
+//! later factorization (a chart's systems keep their conditioning from one iteration to the
+//! next, so trying single precision again would pay both factorizations each time). The first
+//! fallback earns one more try ([`RETRIES`]): an iteration's first system is often the only
+//! ill-conditioned one, built on a start that squeezes some triangles. On the bunny
+//! subdivided twice and cut by automatic seams (one SLIM chart of 111k triangles, 112k
+//! unknowns), SLIM's first system did not factor in single precision; its three Newton
+//! systems did, in 0.09–0.12 s each against 0.15 s in double (`docs/performance.md`). Only a
+//! matrix that double precision cannot factor either fails
+//! ([`SolveError::NotPositiveDefinite`]).
 //!
 //! Used for systems of at least [`MIXED_MIN`] unknowns that are factored again at every
 //! iteration (SLIM, MIPS, scaffold, ABF++'s reduced system): below that size the refinement's
@@ -68,6 +74,10 @@ thread_local! {
     pub(crate) static SINGLE_FACTORIZATIONS: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
 }
 
+/// Fallbacks to double precision after which single precision is tried again on the next
+/// factorization (module docs): one.
+pub const RETRIES: usize = 1;
+
 /// Refinement stops once the normwise backward error is below this.
 pub const BACKWARD_ERROR: f64 = 1e-12;
 
@@ -93,6 +103,8 @@ pub struct RefinedLlt<T: Scalar> {
     double: Vec<T>,
     precision: Option<Precision>,
     allow_single: bool,
+    /// Fallbacks to double precision so far ([`RETRIES`]).
+    fallbacks: usize,
     /// Refinement steps of the last solve (0 for a double-precision one).
     pub last_steps: usize,
 }
@@ -100,7 +112,8 @@ pub struct RefinedLlt<T: Scalar> {
 impl<T: Scalar> RefinedLlt<T> {
     /// A factor that tries single precision first when `allow_single`.
     pub fn new(allow_single: bool) -> Self {
-        RefinedLlt { single: Vec::new(), scale: 1.0, double: Vec::new(), precision: None, allow_single, last_steps: 0 }
+        let (single, double) = (Vec::new(), Vec::new());
+        RefinedLlt { single, scale: 1.0, double, precision: None, allow_single, fallbacks: 0, last_steps: 0 }
     }
 
     /// The precision of the current factor (`None` before the first factorization).
@@ -153,9 +166,13 @@ impl<T: Scalar> RefinedLlt<T> {
         self.factor_double(symbolic, a, side, par, stack)
     }
 
-    /// Double-precision factorization; every later one is double too (module docs).
+    /// Double-precision factorization; after more than [`RETRIES`] of them every later one is
+    /// double too (module docs).
     fn factor_double<I: Index>(&mut self, symbolic: &SymbolicCholesky<I>, a: SparseColMatRef<'_, I, T>, side: Side, par: Par, stack: &mut MemStack) -> Result<(), SolveError> {
-        self.allow_single = false;
+        if self.allow_single {
+            self.fallbacks += 1;
+            self.allow_single = self.fallbacks <= RETRIES;
+        }
         self.single = Vec::new();
         self.double.resize(symbolic.len_val(), T::zero_value());
         symbolic
@@ -215,7 +232,14 @@ impl<T: Scalar> RefinedLlt<T> {
     /// `out = (L Lᴴ)⁻¹ r` with the current factor, in its precision, without refinement: the
     /// preconditioner of [`RefinedLlt::solve_inexact`]. Failures:
     /// [`SolveError::NotPositiveDefinite`] before any successful factorization.
-    fn precondition<I: Index>(&self, symbolic: &SymbolicCholesky<I>, r: &[T], out: &mut [T], par: Par, stack: &mut MemStack) -> Result<(), SolveError> {
+    pub(crate) fn precondition<I: Index>(
+        &self,
+        symbolic: &SymbolicCholesky<I>,
+        r: &[T],
+        out: &mut [T],
+        par: Par,
+        stack: &mut MemStack,
+    ) -> Result<(), SolveError> {
         let n = r.len();
         match self.precision {
             None => Err(SolveError::NotPositiveDefinite),
@@ -462,19 +486,26 @@ mod tests {
         let (precision, diff, _) = compare(&a, &val, &rhs(a.nrows(), real));
         assert_eq!(precision, Some(Precision::Double));
         assert!(diff < 1e-12, "{diff}");
-        // Once fallen back, the factor does not try single precision again.
+        // After one fallback the next factorization tries single precision again (a well
+        // conditioned matrix on the same pattern gets it); after a second, never again.
+        let (_, good) = grid(40, 40, 1e-3, 1.0, real);
         let sym = factorize_symbolic_cholesky(a.as_ref(), Side::Lower, SymmetricOrdering::Amd, Default::default()).unwrap();
         let mut mem = MemBuffer::new(RefinedLlt::<f64>::scratch(&sym, Par::Seq, 1));
-        let mat = SparseColMatRef::new(a.as_ref(), &val);
+        let (ill, good) = (SparseColMatRef::new(a.as_ref(), &val), SparseColMatRef::new(a.as_ref(), &good));
         let mut f = RefinedLlt::<f64>::new(true);
-        f.factor(&sym, mat, Side::Lower, Par::Seq, MemStack::new(&mut mem)).unwrap();
-        let mut x = rhs(a.nrows(), real);
-        f.solve_in_place(&sym, mat, Side::Lower, MatMut::from_column_major_slice_mut(&mut x, a.nrows(), 1), Par::Seq, MemStack::new(&mut mem)).unwrap();
-        assert_eq!(f.precision(), Some(Precision::Double));
+        let mut factor_and_solve = |f: &mut RefinedLlt<f64>, mat: SparseColMatRef<'_, usize, f64>| {
+            f.factor(&sym, mat, Side::Lower, Par::Seq, MemStack::new(&mut mem)).unwrap();
+            let mut x = rhs(a.nrows(), real);
+            let x = MatMut::from_column_major_slice_mut(&mut x, a.nrows(), 1);
+            f.solve_in_place(&sym, mat, Side::Lower, x, Par::Seq, MemStack::new(&mut mem)).unwrap();
+            f.precision()
+        };
+        assert_eq!(factor_and_solve(&mut f, ill), Some(Precision::Double));
+        assert_eq!(factor_and_solve(&mut f, good), Some(Precision::Single), "single precision tried again");
+        assert_eq!(factor_and_solve(&mut f, ill), Some(Precision::Double));
         let before = SINGLE_FACTORIZATIONS.with(|c| c.get());
-        f.factor(&sym, mat, Side::Lower, Par::Seq, MemStack::new(&mut mem)).unwrap();
-        assert_eq!(f.precision(), Some(Precision::Double));
-        assert_eq!(SINGLE_FACTORIZATIONS.with(|c| c.get()), before, "single precision tried again");
+        assert_eq!(factor_and_solve(&mut f, good), Some(Precision::Double), "a second fallback is for good");
+        assert_eq!(SINGLE_FACTORIZATIONS.with(|c| c.get()), before, "single precision tried a third time");
     }
 
     /// The iterative methods give the same maps with their large systems factored in single
