@@ -14,7 +14,11 @@
 //! run along creases and hidden places like every other seam; a half still of [`PART_FROM`]
 //! triangles or more is halved again, at most [`MAX_PASSES`] times in all. A level that closes
 //! around inside its piece leaves a ring: it is opened like a hole ([`open_rings`]). The parts
-//! are cut once per chart: every repair round adds the same seams to its cut.
+//! are cut once per chart: every repair round adds the same seams to its cut. A level that
+//! crosses its piece's outline more than twice can cut off a sliver besides the two halves (on
+//! fertility subdivided three times, a part of 420 triangles): a part under [`SLIVER_BELOW`]
+//! triangles gives back the seams it shares with the neighbour it shares the most of them with
+//! ([`sliver_seams`]), and joins it.
 //!
 //! A part holds its own share of its piece's stretch, measured against its own density, so it
 //! can break the rule where the piece solved whole would not: a round whose parts break it is
@@ -91,9 +95,80 @@ pub fn part_seams(
         if out.len() == before {
             break;
         }
-        built = Some(build_charts_with(ctx.mesh, &all, Some(mask), ctx.render));
+        let mut pieces = build_charts_with(ctx.mesh, &all, Some(mask), ctx.render);
+        // A halving that cut off a sliver (its level crossed the piece's outline more than
+        // twice) gives the sliver back to its largest neighbour across the new seams.
+        let drop = sliver_seams(&pieces, &out[before..], SLIVER_BELOW);
+        if !drop.is_empty() {
+            let gone: std::collections::HashSet<[u32; 2]> = drop.into_iter().collect();
+            // Only the halving's own seams are dropped: they run inside the pieces it cut.
+            let keep = |s: &[u32; 2]| !gone.contains(&[s[0].min(s[1]), s[0].max(s[1])]);
+            let tail: Vec<[u32; 2]> = out.drain(before..).filter(keep).collect();
+            out.extend(tail);
+            all.retain(keep);
+            pieces = build_charts_with(ctx.mesh, &all, Some(mask), ctx.render);
+        }
+        built = Some(pieces);
     }
     (out, built)
+}
+
+/// Parts of fewer triangles than this, cut off by a halving, are given back to a neighbour
+/// ([`sliver_seams`]).
+pub const SLIVER_BELOW: usize = PART_FROM / 16;
+
+/// The seams among `new_seams` (a halving's, sorted mesh vertex pairs or not) to remove so
+/// that every piece of `pieces` with fewer than `below` triangles and a border on them joins
+/// the neighbour it shares the most of them with (one neighbour each, so two large parts are
+/// never joined through a sliver). Sorted vertex pairs; deterministic (pieces in order, ties
+/// to the first neighbour).
+pub fn sliver_seams(pieces: &[Chart], new_seams: &[[u32; 2]], below: usize) -> Vec<[u32; 2]> {
+    use std::collections::{HashMap, HashSet};
+    let key = |a: u32, b: u32| [a.min(b), a.max(b)];
+    let new: HashSet<[u32; 2]> = new_seams.iter().map(|s| key(s[0], s[1])).collect();
+    // The pieces on either side of every new seam edge.
+    let mut sides: HashMap<[u32; 2], Vec<usize>> = HashMap::new();
+    let border = |p: &Chart| -> Vec<[u32; 2]> {
+        let mut e: Vec<[u32; 2]> = p
+            .boundary_loops
+            .iter()
+            .flat_map(|l| (0..l.len()).map(move |i| (l[i], l[(i + 1) % l.len()])))
+            .map(|(a, b)| key(p.mesh_vertex[a as usize], p.mesh_vertex[b as usize]))
+            .filter(|e| new.contains(e))
+            .collect();
+        e.sort_unstable();
+        e.dedup();
+        e
+    };
+    let borders: Vec<Vec<[u32; 2]>> = pieces.iter().map(border).collect();
+    for (k, b) in borders.iter().enumerate() {
+        for e in b {
+            sides.entry(*e).or_default().push(k);
+        }
+    }
+    let mut out = Vec::new();
+    let mut joined = vec![false; pieces.len()];
+    for (k, p) in pieces.iter().enumerate() {
+        if p.triangles.len() >= below || borders[k].is_empty() || joined[k] {
+            continue;
+        }
+        let mut shared: Vec<(usize, usize)> = Vec::new();
+        for e in &borders[k] {
+            for &o in sides[e].iter().filter(|&&o| o != k) {
+                match shared.iter_mut().find(|s| s.0 == o) {
+                    Some(s) => s.1 += 1,
+                    None => shared.push((o, 1)),
+                }
+            }
+        }
+        let Some(&(to, _)) = shared.iter().max_by(|a, b| a.1.cmp(&b.1).then(b.0.cmp(&a.0))) else { continue };
+        out.extend(borders[k].iter().filter(|e| sides[*e].contains(&to)));
+        joined[k] = true;
+        joined[to] = joined[to] || pieces[to].triangles.len() < below;
+    }
+    out.sort_unstable();
+    out.dedup();
+    out
 }
 
 /// Seams that open every piece of `pieces` with more than one outline (a part whose level
@@ -129,4 +204,52 @@ fn cut_into_parts(ctx: &Context<'_, '_>, chart: &Chart, piece: &Chart, fiedler: 
     let options = &ctx.options.auto_seams;
     let cost = cuts::edge_costs_cached(ctx.mesh, &graph, piece, options, ctx.avoid, Some(&ctx.visibility));
     cuts::split::candidates_with(&graph, &cost, piece, ctx.avoid, Some(f), false).into_iter().next().unwrap_or_default()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::PolyMesh;
+
+    /// A grid of 10 × 6 quads cut by a halving into a left part, a right part and a sliver of
+    /// three quads at the bottom under the cut, two of them on the left: the sliver joins the
+    /// left part (three shared seam edges against two), the seam between the two large parts
+    /// and the sliver's border with the right one stay, and a sliver limit below its size
+    /// keeps everything.
+    #[test]
+    fn a_sliver_joins_the_neighbour_it_shares_the_most_seam_with() {
+        let (w, h) = (10u32, 6u32);
+        let id = |i: u32, j: u32| j * (w + 1) + i;
+        let positions: Vec<[f64; 3]> = (0..=h).flat_map(|j| (0..=w).map(move |i| [i as f64, j as f64, 0.0])).collect();
+        let mut corner_verts = Vec::new();
+        for j in 0..h {
+            for i in 0..w {
+                corner_verts.extend([id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+        let face_sizes = vec![4u32; (w * h) as usize];
+        let mesh = PolyMesh::new(&positions, &corner_verts, &face_sizes).unwrap();
+        let key = |a: u32, b: u32| [a.min(b), a.max(b)];
+        // The halving: x = 5 from y = 1 up; the sliver (cells 3..6 of the bottom row) closed
+        // off by y = 1 from x = 3 to 6 and by x = 3 and x = 6 in the bottom row.
+        let mut seams: Vec<[u32; 2]> = (1..h).map(|j| key(id(5, j), id(5, j + 1))).collect();
+        let to_left = vec![key(id(3, 1), id(4, 1)), key(id(4, 1), id(5, 1)), key(id(3, 0), id(3, 1))];
+        let to_right = vec![key(id(5, 1), id(6, 1)), key(id(6, 0), id(6, 1))];
+        seams.extend(to_left.iter().chain(&to_right));
+        let pieces = build_charts_with(&mesh, &seams, None, None);
+        let mut sizes: Vec<usize> = pieces.iter().map(|p| p.faces.len()).collect();
+        sizes.sort_unstable();
+        assert_eq!(sizes, vec![3, 28, 29]);
+        let mut expected = to_left.clone();
+        expected.sort_unstable();
+        assert_eq!(sliver_seams(&pieces, &seams, 7), expected);
+        assert!(sliver_seams(&pieces, &seams, 6).is_empty(), "a sliver of 6 triangles is not below 6");
+        let kept: Vec<[u32; 2]> = seams.iter().copied().filter(|s| !expected.contains(s)).collect();
+        let mut sizes: Vec<usize> = build_charts_with(&mesh, &kept, None, None).iter().map(|p| p.faces.len()).collect();
+        sizes.sort_unstable();
+        assert_eq!(sizes, vec![29, 31], "the sliver joins the left part");
+        // Seams not among the halving's are never removed: without the sliver's own seams
+        // given as new, nothing is.
+        assert!(sliver_seams(&pieces, &seams[..(h - 1) as usize], 7).is_empty());
+    }
 }
