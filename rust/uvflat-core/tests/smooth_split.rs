@@ -274,3 +274,64 @@ fn a_split_on_the_proxy_fiedler_vector_is_a_loop_around_the_tube() {
     let share = a0 / (a0 + a1);
     assert!((share - 0.5).abs() <= 0.1 + 1e-9, "area share {share:.3}");
 }
+
+/// Parts ([`uvflat_core::pipeline::parts`]) are halved by triangles, not area, and prefer a
+/// level that leaves no side of `max_triangles` or more: on a tube with a narrow waist at a
+/// third of its triangles, the cheapest loop is the waist; with a limit of 0.65 of the
+/// triangles, that loop leaves a side too large and the tube is halved near its middle, along
+/// one loop. The tube's rings are twice as dense on one half, so its middle by triangles is
+/// not its middle by area.
+#[test]
+fn parts_are_halved_by_triangles_and_leave_no_side_over_the_limit() {
+    let (length, n) = (12.0, 32);
+    let waist = |z: f64| 1.0 - 0.6 * (-((z - 0.3 * length) / 0.6).powi(2)).exp();
+    let mut rings = capsule_rings(length, TAU / n as f64 * 0.87, waist);
+    // Twice the rings on the far half (by z): a ring between each pair there.
+    let mut dense = Vec::new();
+    for w in rings.windows(2) {
+        dense.push(w[0]);
+        if w[0].0 > 0.5 * length && w[1].0 <= length {
+            dense.push((0.5 * (w[0].0 + w[1].0), waist(0.5 * (w[0].0 + w[1].0))));
+        }
+    }
+    dense.push(*rings.last().unwrap());
+    rings = dense;
+    let m = revolve(&rings, n);
+    let mesh = PolyMesh::new(&m.positions, &m.corner_verts, &m.face_sizes).unwrap();
+    let chart = build_charts(&mesh, &[], None).remove(0);
+    let graph = ChartGraph::new(&mesh, &chart);
+    let avoid = vec![false; m.positions.len()];
+    let cost = cuts::edge_costs(&mesh, &graph, &chart, &AutoSeamOptions::default(), &avoid);
+    let f = cuts::fiedler::fiedler_vector(&chart).expect("a tube has a Fiedler vector");
+    let total = chart.triangles.len();
+    // Triangles of each piece the seams leave.
+    let sides = |seams: &[[u32; 2]]| -> Vec<usize> {
+        build_charts(&mesh, seams, None).iter().map(|c| c.triangles.len()).collect()
+    };
+    // No limit: the waist, the cheapest loop.
+    let free = split::halve_into_parts(&graph, &cost, &chart, &avoid, &f, usize::MAX);
+    let tris = sides(&free);
+    assert_eq!(tris.len(), 2, "{tris:?}");
+    let small = *tris.iter().min().unwrap() as f64 / total as f64;
+    assert!(small < 0.3, "without a limit the cut is not at the waist: sides {tris:?}");
+    // A limit of 0.65 of the triangles: no side at or over it, one loop around the tube.
+    let limit = (0.65 * total as f64) as usize;
+    let parts = split::halve_into_parts(&graph, &cost, &chart, &avoid, &f, limit);
+    let tris = sides(&parts);
+    assert_eq!(tris.len(), 2, "{tris:?}");
+    assert!(tris.iter().all(|&t| t < limit), "a side of {tris:?} holds {limit} triangles or more");
+    let mut degree = std::collections::BTreeMap::<u32, usize>::new();
+    for &[a, b] in &parts {
+        *degree.entry(a).or_default() += 1;
+        *degree.entry(b).or_default() += 1;
+    }
+    assert!(degree.values().all(|&d| d == 2), "the seam is not a loop: {degree:?}");
+    // Halved by triangles: near the middle of the triangles, far from the middle of the area
+    // (the dense half holds two thirds of the triangles on half the length).
+    let share = tris[0] as f64 / total as f64;
+    assert!((share - 0.5).abs() <= 0.1 + 1e-9, "triangle share {share:.3}: {tris:?}");
+    let area_split = split::spectral_halve(&graph, &cost, &chart).expect("the area split works on a tube");
+    let area_tris = sides(&area_split.seams);
+    let area_share = area_tris[0] as f64 / total as f64;
+    assert!((area_share - 0.5).abs() > (share - 0.5).abs(), "by area {area_tris:?}, by triangles {tris:?}");
+}

@@ -21,6 +21,10 @@
 //!    `cost × (1 + |a − ½|)`, `a` the area share of one side (a mild preference for halves);
 //!    ties keep the earlier level.
 //!
+//! Parts ([`halve_into_parts`]: a piece halved only so that its halves are solved side by
+//! side) weigh polygons by their triangles instead of their area, and among clean halvings
+//! prefer a level that leaves both sides under a triangle limit.
+//!
 //! Fallback: [`super::planar_split::halve_planar`] (a plane through the principal axis) when
 //! the chart has fewer than [`SPECTRAL_MIN_POLYGONS`] polygons, the Fiedler vector cannot be
 //! computed, or every level's band is closed off by edges that must not be cut.
@@ -62,7 +66,7 @@ pub struct Split {
     pub side: Vec<bool>,
     /// Total cut cost of the seam.
     pub cost: f64,
-    /// Area share of the first side.
+    /// Area share of the first side (its share of the triangles for [`halve_into_parts`]).
     pub area_share: f64,
     /// Connected parts left (2 for a clean halving).
     pub parts: usize,
@@ -107,7 +111,7 @@ pub fn candidates_with(
         return out;
     }
     let split = match fiedler {
-        Some(f) => spectral_halve_of(graph, cost, chart, &f),
+        Some(f) => spectral_halve_of(graph, cost, chart, &f, None),
         None => spectral_halve(graph, cost, chart),
     };
     if let Some(split) = split {
@@ -130,15 +134,46 @@ pub fn spectral_halve(graph: &ChartGraph, cost: &[f64], chart: &Chart) -> Option
     if graph.polygons.len() < SPECTRAL_MIN_POLYGONS || cost.len() != graph.edges.len() {
         return None;
     }
-    spectral_halve_of(graph, cost, chart, &fiedler_vector(chart)?)
+    spectral_halve_of(graph, cost, chart, &fiedler_vector(chart)?, None)
 }
 
-/// [`spectral_halve`] along the levels of `f`, a Fiedler vector of the chart (per vertex).
-fn spectral_halve_of(graph: &ChartGraph, cost: &[f64], chart: &Chart, f: &[f64]) -> Option<Split> {
+/// Seams that halve `chart` into two parts to be solved side by side
+/// ([`crate::pipeline::parts`]): the spectral split along `f` (a Fiedler vector of the chart,
+/// per vertex) that prefers, after a clean halving, a level whose two sides each hold fewer
+/// than `max_triangles` triangles (a larger side would be halved again: another pass, and
+/// parts of unequal size, the largest setting the time of the solves side by side); the
+/// planar split when the spectral one fails. Empty when the chart cannot be halved.
+pub fn halve_into_parts(
+    graph: &ChartGraph,
+    cost: &[f64],
+    chart: &Chart,
+    avoid: &[bool],
+    f: &[f64],
+    max_triangles: usize,
+) -> Vec<[u32; 2]> {
+    if graph.polygons.len() < 2 {
+        return Vec::new();
+    }
+    match spectral_halve_of(graph, cost, chart, f, Some(max_triangles)) {
+        Some(split) => split.seams,
+        None => halve_planar(graph, chart, avoid),
+    }
+}
+
+/// [`spectral_halve`] along the levels of `f`, a Fiedler vector of the chart (per vertex);
+/// with `max_triangles`, a level whose sides both hold fewer triangles comes first after a
+/// clean halving ([`halve_into_parts`]).
+fn spectral_halve_of(
+    graph: &ChartGraph,
+    cost: &[f64],
+    chart: &Chart,
+    f: &[f64],
+    max_triangles: Option<usize>,
+) -> Option<Split> {
     if cost.len() != graph.edges.len() {
         return None;
     }
-    let (quantile, area, total) = quantiles(graph, chart, f)?;
+    let (quantile, area, total) = quantiles(graph, chart, f, max_triangles.is_some())?;
     let neighbours = dual_adjacency(graph);
     let np = graph.polygons.len();
     let band = BAND.min(BAND_POLYGONS as f64 / np as f64);
@@ -150,21 +185,30 @@ fn spectral_halve_of(graph: &ChartGraph, cost: &[f64], chart: &Chart, f: &[f64])
             .map(|&q| cut_at_level(graph, cost, chart, &quantile, &area, total, &neighbours, q, band))
             .collect()
     };
-    let mut best: Option<(bool, f64, Split)> = None;
+    // Triangles per polygon, for the sides' sizes.
+    let triangles: Vec<usize> = graph.polygons.iter().map(|p| p.len().saturating_sub(2)).collect();
+    let all: usize = triangles.iter().sum();
+    let too_large = |split: &Split| {
+        max_triangles.is_some_and(|m| {
+            let first: usize = split.side.iter().zip(&triangles).filter(|x| *x.0).map(|x| *x.1).sum();
+            first.max(all - first) >= m
+        })
+    };
+    let mut best: Option<((bool, bool, f64), Split)> = None;
     for split in splits {
         let Some(split) = split else { continue };
-        let key = (split.parts != 2, split.cost * (1.0 + (split.area_share - 0.5).abs()));
-        if best.as_ref().is_none_or(|b| (key.0, key.1) < (b.0, b.1)) {
-            best = Some((key.0, key.1, split));
+        let key = (split.parts != 2, too_large(&split), split.cost * (1.0 + (split.area_share - 0.5).abs()));
+        if best.as_ref().is_none_or(|b| key < b.0) {
+            best = Some((key, split));
         }
     }
-    best.map(|b| b.2)
+    best.map(|b| b.1)
 }
 
 /// Per polygon of `graph`, its area quantile in the order of `f` (the mean over its corners;
 /// step 1 of the module docs), with the polygons' areas and their total; `None` when the chart
 /// is too small, `f`'s length does not match, or the area is not positive.
-fn quantiles(graph: &ChartGraph, chart: &Chart, f: &[f64]) -> Option<(Vec<f64>, Vec<f64>, f64)> {
+fn quantiles(graph: &ChartGraph, chart: &Chart, f: &[f64], by_triangles: bool) -> Option<(Vec<f64>, Vec<f64>, f64)> {
     let np = graph.polygons.len();
     if np < SPECTRAL_MIN_POLYGONS || f.len() != chart.positions.len() {
         return None;
@@ -174,7 +218,11 @@ fn quantiles(graph: &ChartGraph, chart: &Chart, f: &[f64]) -> Option<(Vec<f64>, 
         .iter()
         .map(|poly| poly.iter().map(|&v| f[v as usize]).sum::<f64>() / poly.len().max(1) as f64)
         .collect();
-    let area: Vec<f64> = graph.polygons.iter().map(|poly| polygon_area(chart, poly)).collect();
+    let area: Vec<f64> = if by_triangles {
+        graph.polygons.iter().map(|poly| poly.len().saturating_sub(2) as f64).collect()
+    } else {
+        graph.polygons.iter().map(|poly| polygon_area(chart, poly)).collect()
+    };
     let total: f64 = area.iter().sum();
     if !(total > 0.0 && total.is_finite()) {
         return None;

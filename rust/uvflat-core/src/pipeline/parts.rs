@@ -9,10 +9,16 @@
 //! parallel: 3.1 s there, 7.8 s in all (docs/performance.md).
 //!
 //! A piece is halved along the level of the chart's Fiedler vector (read on its coarse proxy,
-//! once per chart: [`crate::cuts::ChartCutter::fiedler`]) at its half area, moved within a
-//! band to the cheapest loop or path by a minimum cut ([`crate::cuts::split`]), so the seams
-//! run along creases and hidden places like every other seam; a half still of [`PART_FROM`]
-//! triangles or more is halved again, at most [`MAX_PASSES`] times in all. A level that closes
+//! once per chart: [`crate::cuts::ChartCutter::fiedler`]) at half its triangles, moved within
+//! a band to the cheapest loop or path by a minimum cut ([`crate::cuts::split::halve_into_parts`]),
+//! so the seams run along creases and hidden places like every other seam. The parts are solved
+//! side by side, so their sizes matter, not their areas, and a level that leaves both halves
+//! under [`PART_FROM`] triangles comes first: halved at half its area and at its cheapest
+//! level, the bunny subdivided three times (446k triangles) came out in parts of 123k and
+//! 323k triangles, and the second was halved again (4 islands, 8.5–9.0 s; now 3 islands,
+//! 7.3 s); the lion subdivided twice in parts of 224k and 43k triangles (7.8 s; now 192k and
+//! 74k, 5.7 s). A half still of [`PART_FROM`] triangles or more is halved again, at most
+//! [`MAX_PASSES`] times in all. A level that closes
 //! around inside its piece leaves a ring: it is opened like a hole ([`open_rings`]). The parts
 //! are cut once per chart: every repair round adds the same seams to its cut. A level that
 //! crosses its piece's outline more than twice can cut off a sliver besides the two halves (on
@@ -203,7 +209,7 @@ fn cut_into_parts(ctx: &Context<'_, '_>, chart: &Chart, piece: &Chart, fiedler: 
     let graph = cuts::graph::ChartGraph::new(ctx.mesh, piece);
     let options = &ctx.options.auto_seams;
     let cost = cuts::edge_costs_cached(ctx.mesh, &graph, piece, options, ctx.avoid, Some(&ctx.visibility));
-    cuts::split::candidates_with(&graph, &cost, piece, ctx.avoid, Some(f), false).into_iter().next().unwrap_or_default()
+    cuts::split::halve_into_parts(&graph, &cost, piece, ctx.avoid, &f, PART_FROM)
 }
 
 #[cfg(test)]
