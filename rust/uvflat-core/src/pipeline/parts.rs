@@ -198,8 +198,9 @@ fn join_outlines(ctx: &Context<'_, '_>, piece: &Chart) -> Vec<[u32; 2]> {
     graph.mesh_seams(piece, &cut)
 }
 
-/// The seams that halve `piece` (a piece of `chart`) near the half-area level of `fiedler`
-/// (per vertex of `chart`; [`crate::cuts::split`]), or none.
+/// The seams that halve `piece` (a piece of `chart`) near the level of `fiedler` (per vertex
+/// of `chart`) at half its triangles, both halves under [`PART_FROM`] triangles where a level
+/// allows ([`crate::cuts::split::halve_into_parts`]), or none.
 fn cut_into_parts(ctx: &Context<'_, '_>, chart: &Chart, piece: &Chart, fiedler: &[f64]) -> Vec<[u32; 2]> {
     let to_chart = super::repair::piece_to_original(chart, piece);
     if to_chart.contains(&u32::MAX) {
