@@ -127,7 +127,8 @@ def read(ext, obj):
                            uv=(io.read_uv(obj.data).astype(np.float64)
                                if io.active_uv_name(obj.data) is not None
                                else np.zeros((len(corner_verts), 2))),
-                           seams=io.read_seams(obj.data))
+                           seams=io.read_seams(obj.data),
+                           triangles=io.read_loop_triangles(obj.data, face_sizes))
 
 
 def fan_triangles(face_sizes):
@@ -150,10 +151,12 @@ def _signed(uv, a, b, c):
 def flipped_triangles(data, faces_chart):
     """Faces that are flipped in UV: computed here, independently of the core.
 
-    Triangles and n-gons (n >= 5) by a fan from their first corner; a quad counts as flipped
-    only if neither of its two diagonals splits it into two triangles of the chart's
-    orientation (a non-convex quad image is not a flip).  The orientation of a chart is the
-    sign of the majority of its faces' areas.  Returns the number of flipped faces.
+    Triangles and n-gons (n >= 5) by the triangles Blender renders (``data.triangles``, its
+    loop triangles, when ``data`` has them; else a fan from each face's first corner); a quad
+    counts as flipped only if neither of its two diagonals splits it into two triangles of
+    the chart's orientation (a non-convex quad image is not a flip).  The orientation of a
+    chart is the sign of the majority of its faces' areas.  Returns the number of flipped
+    faces.
     """
     fs = np.asarray(data.face_sizes, dtype=np.int64)
     chart = np.asarray(faces_chart)
@@ -169,7 +172,12 @@ def flipped_triangles(data, faces_chart):
         a = area[chart == k]
         sign[chart == k] = 1.0 if (a > 0).sum() >= (a < 0).sum() else -1.0
     flipped = np.zeros(len(fs), dtype=bool)
-    tris, face = fan_triangles(fs)
+    tris = getattr(data, "triangles", None)
+    if tris is None:
+        tris, face = fan_triangles(fs)
+    else:
+        tris = np.asarray(tris, dtype=np.int64).reshape(-1, 3)
+        face = np.searchsorted(starts, tris[:, 0], side="right") - 1
     bad = _signed(data.uv, tris[:, 0], tris[:, 1], tris[:, 2]) * sign[face] <= 0
     not_quad = fs[face] != 4
     np.logical_or.at(flipped, face[not_quad], bad[not_quad])
@@ -181,6 +189,18 @@ def flipped_triangles(data, faces_chart):
         split13 = ((_signed(data.uv, c1, c2, c3) * s > 0) & (_signed(data.uv, c1, c3, c0) * s > 0))
         flipped[q] = ~(split02 | split13)
     return int((flipped & (chart >= 0)).sum())
+
+
+def test_the_flip_count_reads_the_triangles_blender_renders():
+    """A concave pentagon whose fan from its first corner is unfolded while the triangulation
+    given as Blender's has a flipped triangle: the helper counts the face flipped with those
+    triangles and not with the fan (so a fold on Blender's triangles cannot hide behind it)."""
+    uv = np.array([[0.0, 0.0], [2.0, 0.0], [1.0, 0.2], [2.0, 2.0], [0.0, 2.0]])
+    base = dict(positions=np.zeros((5, 3)), corner_verts=np.arange(5), face_sizes=np.array([5]), uv=uv)
+    assert flipped_triangles(SimpleNamespace(**base), [0]) == 0
+    blender = np.array([[1, 2, 3], [0, 1, 3], [0, 3, 4]])
+    assert flipped_triangles(SimpleNamespace(**base, triangles=blender), [0]) == 1
+    assert flipped_triangles(SimpleNamespace(**base, triangles=blender), [-1]) == 0
 
 
 def edge_pairs(data):
