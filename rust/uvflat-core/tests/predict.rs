@@ -168,3 +168,43 @@ fn a_map_far_from_its_plan_is_split_after_one_solve() {
     assert_eq!(run(Method::Abf(abf::AbfOptions::default())).phases.far_splits, 0);
     assert_eq!(run(Method::Slim(slim::SlimOptions::default())).phases.far_splits, 0);
 }
+
+/// A plan whose predicted mean area distortion stays far above the split's limit (the cow,
+/// closed, under `abf`: its rounds stall near 1.57) is split before any solve when the chart
+/// may be split, so its one-cone rounds are skipped there; where it may not (the last split
+/// level), they run as before. Either way the plan's mean stays far above the limit: the
+/// rounds skipped would not have kept the chart whole.
+#[test]
+fn a_plan_far_above_the_split_limit_gets_no_one_cone_rounds_when_a_split_follows() {
+    use uvflat_core::pipeline::{phases::PhaseClock, predict, repair, rule::AtlasRule, Context};
+    let Some(dir) = common::shared_meshes() else { return };
+    let s = common::load(&dir.join("cow.off"));
+    let mesh = PolyMesh::new(&s.positions, &s.corner_verts, &s.face_sizes).unwrap();
+    let charts = build_charts(&mesh, &[], None);
+    assert_eq!(charts.len(), 1);
+    let options = UnwrapOptions { method: Method::Abf(abf::AbfOptions::default()), ..Default::default() };
+    let pins = std::collections::HashMap::new();
+    let avoid = vec![false; s.positions.len()];
+    let ctx = Context {
+        mesh: &mesh,
+        render: None,
+        pins: &pins,
+        options: &options,
+        avoid: &avoid,
+        rule: AtlasRule { max_stretch: options.auto_seams.max_stretch, full: true },
+        clock: PhaseClock::default(),
+        visibility: uvflat_core::cuts::visibility::VisibilityCache::new(s.corner_verts.len()),
+    };
+    let cutter = repair::cutter(&ctx, &charts[0]);
+    let far = repair::MEAN_AREA_LIMIT + repair::MEAN_AREA_GAIN;
+    let whole = predict::plan(&ctx, &charts[0], &cutter, &[], false);
+    let rounds_whole = ctx.clock.get().predicted_rounds;
+    let split = predict::plan(&ctx, &charts[0], &cutter, &[], true);
+    let rounds_split = ctx.clock.get().predicted_rounds - rounds_whole;
+    assert!(whole.mean_area > far, "the premise: a plan far above the limit, {:.3}", whole.mean_area);
+    assert!(split.mean_area > far, "skipped rounds would have kept it whole: {:.3}", split.mean_area);
+    assert!(rounds_split < rounds_whole, "rounds: {rounds_split} with a split to follow, {rounds_whole} without");
+    // The same rounds up to the first that did not help: the same best plan's mean or one
+    // the one-cone rounds lowered.
+    assert!(whole.mean_area <= split.mean_area + 1e-12);
+}

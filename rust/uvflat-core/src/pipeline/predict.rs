@@ -95,12 +95,16 @@ pub struct Plan {
     pub on_proxy: bool,
 }
 
-/// Plan the cones of `chart` (cut by `cutter`) from `seed` (see the module docs).
+/// Plan the cones of `chart` (cut by `cutter`) from `seed` (see the module docs). `may_split`:
+/// whether the caller splits the chart before any solve when the plan's mean stays above
+/// [`super::repair::MEAN_AREA_LIMIT`] (then no one-cone rounds are spent on a plan far above
+/// it).
 pub fn plan(
     ctx: &Context<'_, '_>,
     chart: &Chart,
     cutter: &ChartCutter<'_>,
     seed: &[u32],
+    may_split: bool,
 ) -> Plan {
     let s = ctx.rule.max_stretch;
     let allowed = cutter.allowed();
@@ -187,9 +191,17 @@ pub fn plan(
         if excess <= 0.0 || (rule_excess <= 0.0 && excess <= NEAR_TARGET * chart_area) {
             break;
         }
+        // A plan whose predicted mean stays above the split's limit by more than the gain a
+        // split must bring is split before any solve (when the chart `may_split`): rounds of
+        // one cone after a round that did not help would only polish cones the halves plan
+        // afresh (the bunny subdivided three times, `abf`: two rounds of 0.18 s on its whole
+        // chart at a mean of 1.41–1.45, one on a half; the same islands without them).
+        let split_follows = may_split && best_mean > super::repair::MEAN_AREA_LIMIT + super::repair::MEAN_AREA_GAIN;
         if progress && !next.is_empty() {
             seeds = cut.cones.clone();
             seeds.extend(next.into_iter().take(if single { 1 } else { super::repair::CONES_PER_ROUND }));
+        } else if split_follows {
+            break;
         } else if let (false, Some(b)) = (single, best.as_ref().filter(|b| !b.2.is_empty())) {
             single = true;
             seeds = b.0.cones.clone();

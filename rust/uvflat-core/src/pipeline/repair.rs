@@ -121,7 +121,8 @@ pub fn repair<'a>(
         None
     } else {
         let t = std::time::Instant::now();
-        let plan = super::predict::plan(ctx, chart, &cutter, &seed);
+        let may_split = depth < cuts::MAX_SPLIT_DEPTH && chart.faces.len() >= 2;
+        let plan = super::predict::plan(ctx, chart, &cutter, &seed, may_split);
         ctx.clock.add(|p| p.plan(t, |p| &mut p.cone_placement));
         Some(plan)
     };
