@@ -681,17 +681,30 @@ pub(crate) fn piece_to_original(original: &Chart, chart: &Chart) -> Vec<u32> {
     if std::ptr::eq(original, chart) {
         return (0..chart.positions.len() as u32).collect();
     }
-    // Indexed by mesh corner (a chart's corners are a run of the mesh's, mostly): a hash map
-    // of a 576k-triangle chart's corners cost a tenth of a second per call.
-    let end = original.corner_vertex.iter().map(|&(c, _)| c as usize + 1).max().unwrap_or(0);
-    let mut corner_to_original = vec![u32::MAX; end];
-    for &(c, v) in &original.corner_vertex {
-        corner_to_original[c as usize] = v;
-    }
     let mut to_original = vec![u32::MAX; chart.positions.len()];
-    for &(c, v) in &chart.corner_vertex {
-        if let Some(&o) = corner_to_original.get(c as usize).filter(|&&o| o != u32::MAX) {
-            to_original[v as usize] = o;
+    // Indexed by mesh corner from the chart's first, where its corners span not much more than
+    // their number (a hash map of a 576k-triangle chart's corners cost a tenth of a second
+    // per call); a hash map for a chart of few faces scattered over a large mesh.
+    let corners = &original.corner_vertex;
+    let lo = corners.iter().map(|&(c, _)| c as usize).min().unwrap_or(0);
+    let hi = corners.iter().map(|&(c, _)| c as usize + 1).max().unwrap_or(0);
+    if hi - lo.min(hi) <= 4 * corners.len() + 64 {
+        let mut corner_to_original = vec![u32::MAX; hi - lo.min(hi)];
+        for &(c, v) in corners {
+            corner_to_original[c as usize - lo] = v;
+        }
+        for &(c, v) in &chart.corner_vertex {
+            let o = (c as usize).checked_sub(lo).and_then(|i| corner_to_original.get(i)).copied();
+            if let Some(o) = o.filter(|&o| o != u32::MAX) {
+                to_original[v as usize] = o;
+            }
+        }
+    } else {
+        let corner_to_original: std::collections::HashMap<u32, u32> = corners.iter().copied().collect();
+        for &(c, v) in &chart.corner_vertex {
+            if let Some(&o) = corner_to_original.get(&c) {
+                to_original[v as usize] = o;
+            }
         }
     }
     to_original
@@ -741,4 +754,55 @@ fn worst_vertex(original: &Chart, piece: &Piece, allowed: &[bool], exclude: &[u3
 pub(crate) fn split_length(mesh: &PolyMesh<'_>, seams: &[[u32; 2]]) -> f64 {
     let p = mesh.positions();
     seams.iter().map(|s| crate::geometry::norm(crate::geometry::sub(p[s[1] as usize], p[s[0] as usize]))).sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::charts::build_charts_with;
+    use crate::mesh::PolyMesh;
+
+    /// A strip of `n` unit quads along x, listed in the order `order` (quad `i` spans
+    /// `[i, i + 1]`): vertices `2i` at y = 0 and `2i + 1` at y = 1.
+    fn strip(n: usize, order: &[usize]) -> (Vec<[f64; 3]>, Vec<u32>, Vec<u32>) {
+        let positions: Vec<[f64; 3]> = (0..=n).flat_map(|i| [[i as f64, 0.0, 0.0], [i as f64, 1.0, 0.0]]).collect();
+        let quad = |i: usize| [2 * i, 2 * i + 2, 2 * i + 3, 2 * i + 1].map(|v| v as u32);
+        let corner_verts: Vec<u32> = order.iter().flat_map(|&i| quad(i)).collect();
+        (positions, corner_verts, vec![4; order.len()])
+    }
+
+    /// Every vertex of a piece maps to the vertex of the chart it was cut from that stands for
+    /// the same mesh vertex, whether the chart's corners are a run of the mesh's (the dense
+    /// map) or two faces far apart in its face list (the hash map).
+    #[test]
+    fn piece_vertices_map_to_the_chart_vertex_of_the_same_mesh_vertex() {
+        let n = 200;
+        // Quads 0 and 1 (adjacent) are the first and the last face; the rest lie between.
+        let mut order = vec![0];
+        order.extend(2..n);
+        order.push(1);
+        let (positions, corner_verts, face_sizes) = strip(n, &order);
+        let mesh = PolyMesh::new(&positions, &corner_verts, &face_sizes).unwrap();
+        for faces in [vec![0, n - 1], (0..n).collect::<Vec<_>>()] {
+            let mut mask = vec![false; n];
+            for &f in &faces {
+                mask[f] = true;
+            }
+            let whole = build_charts_with(&mesh, &[], Some(&mask), None);
+            assert_eq!(whole.len(), 1);
+            // Cut between quads 0 and 1 (mesh vertices 2 and 3): two pieces.
+            let pieces = build_charts_with(&mesh, &[[2, 3]], Some(&mask), None);
+            assert!(pieces.len() >= 2);
+            let mut mapped = 0;
+            for p in &pieces {
+                let to = piece_to_original(&whole[0], p);
+                for (v, &o) in to.iter().enumerate() {
+                    assert_ne!(o, u32::MAX, "piece vertex {v} has no chart vertex");
+                    assert_eq!(p.mesh_vertex[v], whole[0].mesh_vertex[o as usize]);
+                    mapped += 1;
+                }
+            }
+            assert!(mapped >= whole[0].positions.len());
+        }
+    }
 }
