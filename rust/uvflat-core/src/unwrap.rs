@@ -8,7 +8,6 @@ use crate::cuts::AutoSeamOptions;
 use crate::error::{Result, UvError};
 use crate::methods::Method;
 use crate::metrics;
-use crate::pipeline::rule::AtlasRule;
 use crate::pipeline::{self, Context, Piece};
 pub use crate::pipeline::outcome::{ChartReport, ChartStatus, Problem};
 pub use crate::pipeline::phases::Phases;
@@ -141,8 +140,7 @@ pub fn unwrap(input: &MeshInput<'_>, options: &UnwrapOptions) -> Result<Unwrappe
     for &v in &options.auto_seams.avoid_vertices {
         avoid[v as usize] = true;
     }
-    let rule = AtlasRule { max_stretch: options.auto_seams.max_stretch, full: options.auto_seams.enabled };
-    let ctx = Context { mesh: &mesh, render: render.as_ref(), pins: &pin_of_corner, options, avoid: &avoid, rule, clock: Default::default(), visibility: crate::cuts::visibility::VisibilityCache::new(mesh.n_corners()) };
+    let ctx = Context::new(&mesh, render.as_ref(), &pin_of_corner, options, &avoid);
     ctx.clock.add(|p| p.build_charts = started.elapsed().as_secs_f64());
     // With a Progress: charts after a cancel are skipped (None), and the unwrap is an error.
     let total = charts.len();

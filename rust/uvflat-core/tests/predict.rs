@@ -176,7 +176,7 @@ fn a_map_far_from_its_plan_is_split_after_one_solve() {
 /// rounds skipped would not have kept the chart whole.
 #[test]
 fn a_plan_far_above_the_split_limit_gets_no_one_cone_rounds_when_a_split_follows() {
-    use uvflat_core::pipeline::{phases::PhaseClock, predict, repair, rule::AtlasRule, Context};
+    use uvflat_core::pipeline::{predict, repair, Context};
     let Some(dir) = common::shared_meshes() else { return };
     let s = common::load(&dir.join("cow.off"));
     let mesh = PolyMesh::new(&s.positions, &s.corner_verts, &s.face_sizes).unwrap();
@@ -185,16 +185,7 @@ fn a_plan_far_above_the_split_limit_gets_no_one_cone_rounds_when_a_split_follows
     let options = UnwrapOptions { method: Method::Abf(abf::AbfOptions::default()), ..Default::default() };
     let pins = std::collections::HashMap::new();
     let avoid = vec![false; s.positions.len()];
-    let ctx = Context {
-        mesh: &mesh,
-        render: None,
-        pins: &pins,
-        options: &options,
-        avoid: &avoid,
-        rule: AtlasRule { max_stretch: options.auto_seams.max_stretch, full: true },
-        clock: PhaseClock::default(),
-        visibility: uvflat_core::cuts::visibility::VisibilityCache::new(s.corner_verts.len()),
-    };
+    let ctx = Context::new(&mesh, None, &pins, &options, &avoid);
     let cutter = repair::cutter(&ctx, &charts[0]);
     let far = repair::MEAN_AREA_LIMIT + repair::MEAN_AREA_GAIN;
     let whole = predict::plan(&ctx, &charts[0], &cutter, &[], false);

@@ -829,7 +829,6 @@ mod tests {
     use crate::charts::build_charts;
     use crate::mesh::PolyMesh;
     use crate::pipeline::outcome::ChartReport;
-    use crate::pipeline::phases::PhaseClock;
     use crate::pipeline::rule::AtlasRule;
     use crate::pipeline::test_mesh::grid;
     use crate::unwrap::UnwrapOptions;
@@ -883,16 +882,7 @@ mod tests {
         pins: &'a HashMap<u32, [f64; 2]>,
         avoid: &'a [bool],
     ) -> Context<'a, 'm> {
-        Context {
-            mesh,
-            render: None,
-            pins,
-            options,
-            avoid,
-            rule: AtlasRule { max_stretch: options.auto_seams.max_stretch, full: true },
-            clock: PhaseClock::default(),
-            visibility: crate::cuts::visibility::VisibilityCache::new(mesh.n_corners()),
-        }
+        Context::new(mesh, None, pins, options, avoid)
     }
 
     #[test]

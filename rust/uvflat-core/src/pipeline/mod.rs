@@ -81,6 +81,22 @@ pub struct Context<'a, 'm> {
     pub visibility: crate::cuts::visibility::VisibilityCache,
 }
 
+impl<'a, 'm> Context<'a, 'm> {
+    /// The context of an unwrap of `mesh` with `options`: the rule from the options (the full
+    /// rule with automatic seams on), no time spent yet, no ray cast yet.
+    pub fn new(
+        mesh: &'a PolyMesh<'m>,
+        render: Option<&'a FaceTriangulation>,
+        pins: &'a HashMap<u32, [f64; 2]>,
+        options: &'a UnwrapOptions,
+        avoid: &'a [bool],
+    ) -> Self {
+        let rule = AtlasRule { max_stretch: options.auto_seams.max_stretch, full: options.auto_seams.enabled };
+        let visibility = crate::cuts::visibility::VisibilityCache::new(mesh.n_corners());
+        Context { mesh, render, pins, options, avoid, rule, clock: Default::default(), visibility }
+    }
+}
+
 impl Context<'_, '_> {
     /// Whether cuts are planned on the prediction ([`predict::plan`]): always, unless
     /// [`crate::cuts::AutoSeamOptions::same_seams`] is off and the method balances area (SLIM,

@@ -503,7 +503,6 @@ fn mesh_pair(chart: &Chart, a: u32, b: u32) -> [u32; 2] {
 mod tests {
     use super::*;
     use crate::pipeline::outcome::ChartReport;
-    use crate::pipeline::phases::PhaseClock;
     use crate::pipeline::rule::AtlasRule;
     use crate::unwrap::UnwrapOptions;
 
@@ -561,16 +560,7 @@ mod tests {
         assert_eq!(rule.broken(&report), Some(Problem::Overlap), "{:?}", report.reason);
         let pins = std::collections::HashMap::new();
         let avoid = vec![false; positions.len()];
-        let ctx = Context {
-            mesh: &mesh,
-            render: None,
-            pins: &pins,
-            options: &options,
-            avoid: &avoid,
-            rule,
-            clock: PhaseClock::default(),
-            visibility: crate::cuts::visibility::VisibilityCache::new(corners.len()),
-        };
+        let ctx = Context::new(&mesh, None, &pins, &options, &avoid);
         let run = || {
             let piece = Piece::new(Some(chart.clone()), report.clone(), Some(uv.clone()), flips.clone(), Vec::new());
             let mut pieces = vec![piece];

@@ -683,13 +683,14 @@ pub(crate) fn piece_to_original(original: &Chart, chart: &Chart) -> Vec<u32> {
     }
     let mut to_original = vec![u32::MAX; chart.positions.len()];
     // Indexed by mesh corner from the chart's first, where its corners span not much more than
-    // their number (a hash map of a 576k-triangle chart's corners cost a tenth of a second
-    // per call); a hash map for a chart of few faces scattered over a large mesh.
+    // their number (with a hash map throughout, this function took 2.9% of the CPU time of the
+    // bunny subdivided three times under `slim`); a hash map for a chart of few faces
+    // scattered over a large mesh.
     let corners = &original.corner_vertex;
     let lo = corners.iter().map(|&(c, _)| c as usize).min().unwrap_or(0);
     let hi = corners.iter().map(|&(c, _)| c as usize + 1).max().unwrap_or(0);
-    if hi - lo.min(hi) <= 4 * corners.len() + 64 {
-        let mut corner_to_original = vec![u32::MAX; hi - lo.min(hi)];
+    if hi - lo <= 4 * corners.len() + 64 {
+        let mut corner_to_original = vec![u32::MAX; hi - lo];
         for &(c, v) in corners {
             corner_to_original[c as usize - lo] = v;
         }
