@@ -75,6 +75,28 @@ fn a_disk_predicted_to_break_the_rule_is_cut_before_any_solve() {
 }
 
 #[test]
+fn a_disk_predicted_to_break_the_rule_by_a_little_more_than_allowed_is_cut_before_any_solve() {
+    use uvflat_core::pipeline::triage::{PREDICTED_BREAK, PREDICTED_BREAK_PLANNED};
+    // The shallowest cap predicted between the two bounds.
+    let (depth, s) = (0..=20)
+        .map(|k| 0.9 + 0.03 * k as f64)
+        .map(|d| (d, cap(d)))
+        .find(|(_, s)| (PREDICTED_BREAK_PLANNED..PREDICTED_BREAK).contains(&predicted(s, 2.0)))
+        .expect("a cap predicted between the bounds");
+    // ABF's map of it as it is breaks the rule: its solve would be thrown away.
+    assert!(measured(&s, Method::Abf(abf::AbfOptions::default()), 2.0) > 0.05, "depth {depth}");
+    for method in [Method::Abf(abf::AbfOptions::default()), Method::Lscm] {
+        let r = unwrap(&s.input(), &UnwrapOptions { method, ..Default::default() }).unwrap();
+        assert_eq!(r.phases.solve, 0.0, "depth {depth}: the cap was solved as it is first");
+        assert!(!r.new_seams.is_empty());
+        common::assert_islands_keep_the_rule(&s, r.charts[0].method, &r);
+    }
+    // SLIM balances area: it is solved as it is first.
+    let options = UnwrapOptions { method: Method::Slim(slim::SlimOptions::default()), ..Default::default() };
+    assert!(unwrap(&s.input(), &options).unwrap().phases.solve > 0.0, "SLIM was not tried on the cap as it is");
+}
+
+#[test]
 fn the_planned_seams_do_not_depend_on_the_method() {
     // A closed sphere: every conformal method gets the predicted plan; where each keeps the
     // rule on it, the seams are the same.
@@ -130,6 +152,22 @@ fn a_plan_predicted_above_the_mean_limit_is_split_before_any_solve() {
     // SLIM balances area and plans no prediction: nothing is split before its solve.
     let slim = unwrap(&s.input(), &UnwrapOptions { method: Method::Slim(slim::SlimOptions::default()), ..Default::default() }).unwrap();
     assert_eq!(slim.phases.predicted_splits, 0);
+}
+
+/// The bunny subdivided twice (111,456 triangles, closed: planned on its proxy) under `abf`:
+/// its plan is split before any solve, the split following the Fiedler vector made beside
+/// the plan (`pipeline/repair.rs`). Every island keeps the rule, and the outcome is the same on
+/// one thread, to the bit.
+#[test]
+fn a_scan_planned_on_its_proxy_splits_the_same_on_any_number_of_threads() {
+    let Some(dir) = common::shared_meshes() else { return };
+    let s = common::subdivide(&common::subdivide(&common::load(&dir.join("bunny.off"))));
+    assert!(s.face_sizes.len() >= uvflat_core::cuts::coarse::CLOSED_PROXY_FROM);
+    let options = UnwrapOptions { method: Method::Abf(abf::AbfOptions::default()), ..Default::default() };
+    let r = unwrap(&s.input(), &options).unwrap();
+    assert!(r.phases.predicted_splits >= 1, "{:?}", r.phases);
+    common::assert_islands_keep_the_rule(&s, "abf", &r);
+    common::assert_same_on_one_thread(&s, &options, &r);
 }
 
 #[test]

@@ -11,8 +11,9 @@
 //!    rule; pinned disks and charts with a defect are never cut. With automatic seams off
 //!    every chart is solved as it is.
 //!    A disk is cut first when its predicted flattening ([`crate::cuts::predicted_outside`])
-//!    breaks Max Stretch by far (under a method that balances area, only with
-//!    [`crate::cuts::AutoSeamOptions::same_seams`]).
+//!    breaks Max Stretch ([`triage::PREDICTED_BREAK_PLANNED`]; under a method that balances
+//!    area, with [`crate::cuts::AutoSeamOptions::same_seams`] off, only a disk it would cut
+//!    into parts, and only by far: [`triage::PREDICTED_BREAK`]).
 //!    A hard surface (flat or rolled everywhere but along its creases, with more curved
 //!    vertices than cones) is first cut along its creases ([`creases`]), each region taking
 //!    the road on its own.
@@ -188,8 +189,8 @@ fn road(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], depth: us
     // The scale system of the prediction, kept for the cutter if the disk is cut.
     let mut solver = None;
     if road == Triage::SolveThenRepair && (ctx.plans_on_prediction() || parts::wanted(ctx, chart)) {
-        // A disk whose conformal flattening is predicted to break Max Stretch by far is cut
-        // before any solve (the solve as it is would be thrown away). Only the scale system
+        // A disk whose conformal flattening is predicted to break Max Stretch is cut before
+        // any solve (the solve as it is would be thrown away; see the two bounds). Only the scale system
         // is built here: the cutter's graph, costs and occlusion rays wait until a cut is due.
         // Under a method that balances area this is asked of the disks it would cut into
         // parts ([`parts`]): their whole solve is the longest of the unwrap (an open scan, the
@@ -198,7 +199,8 @@ fn road(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], depth: us
         let s = crate::cuts::cones::ScaleSolver::new(chart);
         let predicted = s.as_ref().and_then(|s| crate::cuts::predicted_outside(chart, s, ctx.rule.max_stretch));
         ctx.clock.add(|p| p.plan(t, |p| &mut p.cut_state));
-        if predicted.is_some_and(|o| o > triage::PREDICTED_BREAK) {
+        let limit = if ctx.plans_on_prediction() { triage::PREDICTED_BREAK_PLANNED } else { triage::PREDICTED_BREAK };
+        if predicted.is_some_and(|o| o > limit) {
             let cutter = repair::cutter_with(ctx, chart, s);
             return repair::repair(ctx, chart, base_seams, depth, None, Some(cutter));
         }
