@@ -190,8 +190,9 @@ fn road(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], depth: us
     let mut solver = None;
     if road == Triage::SolveThenRepair && (ctx.plans_on_prediction() || parts::wanted(ctx, chart)) {
         // A disk whose conformal flattening is predicted to break Max Stretch is cut before
-        // any solve (the solve as it is would be thrown away; see the two bounds). Only the scale system
-        // is built here: the cutter's graph, costs and occlusion rays wait until a cut is due.
+        // any solve (the solve as it is would be thrown away; see the two bounds). Only the
+        // scale system is built here: the cutter's graph, costs and occlusion rays wait until
+        // a cut is due.
         // Under a method that balances area this is asked of the disks it would cut into
         // parts ([`parts`]): their whole solve is the longest of the unwrap (an open scan, the
         // camel's head subdivided twice under `slim`: 7.6 s of 12.9 s, thrown away).
