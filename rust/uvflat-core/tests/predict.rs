@@ -208,6 +208,21 @@ fn a_map_far_from_its_plan_is_split_after_one_solve() {
     assert_eq!(run(Method::Slim(slim::SlimOptions::default())).phases.far_splits, 0);
 }
 
+/// A large chart whose first map breaks the density bound under a conformal method is split
+/// without cone rounds (`pipeline/repair.rs::CONE_ROUNDS_BELOW`): the beetle subdivided twice
+/// under `lscm` (618,496 triangles), far from its plan as a whole, then a half of 323,892
+/// triangles at 8.2% outside the bound, whose three cone rounds left it there. Both go to the
+/// split after one solve, and every island keeps the rule.
+#[test]
+fn a_large_chart_beyond_the_density_bound_is_split_after_one_solve() {
+    let Some(dir) = common::shared_meshes() else { return };
+    let s = common::subdivide(&common::subdivide(&common::load(&dir.join("beetle.off"))));
+    assert!(s.face_sizes.len() >= 2 * uvflat_core::pipeline::repair::CONE_ROUNDS_BELOW);
+    let r = unwrap(&s.input(), &UnwrapOptions { method: Method::Lscm, ..Default::default() }).unwrap();
+    assert!(r.phases.far_splits >= 2, "{:?}", r.phases);
+    common::assert_islands_keep_the_rule(&s, "lscm", &r);
+}
+
 /// A plan whose predicted mean area distortion stays far above the split's limit (the cow,
 /// closed, under `abf`: its rounds stall near 1.57) is split before any solve when the chart
 /// may be split, so its one-cone rounds are skipped there; where it may not (the last split

@@ -275,12 +275,13 @@ fn a_split_on_the_proxy_fiedler_vector_is_a_loop_around_the_tube() {
     assert!((share - 0.5).abs() <= 0.1 + 1e-9, "area share {share:.3}");
 }
 
-/// Parts ([`uvflat_core::pipeline::parts`]) are halved by triangles, not area, and prefer a
-/// level that leaves no side of `max_triangles` or more: on a tube with a narrow waist at a
-/// third of its triangles, the cheapest loop is the waist; with a limit of 0.65 of the
-/// triangles, that loop leaves a side too large and the tube is halved near its middle, along
-/// one loop. The tube's rings are twice as dense on one half, so its middle by triangles is
-/// not its middle by area.
+/// Parts ([`uvflat_core::pipeline::parts`]) are halved by triangles, not area, prefer a
+/// level that leaves no side of `max_triangles` or more, and then a balanced one
+/// ([`split::BALANCED_SHARE`]): on a tube with a narrow waist at a fifth of its triangles, the
+/// cheapest loop is the waist (the pipeline's split takes it); with no limit, that loop leaves
+/// an unbalanced side, and with a limit of 0.65 of the triangles a side too large: either way
+/// the tube is halved near its middle, along one loop. The tube's rings are twice as dense on
+/// one half, so its middle by triangles is not its middle by area.
 #[test]
 fn parts_are_halved_by_triangles_and_leave_no_side_over_the_limit() {
     let (length, n) = (12.0, 32);
@@ -308,12 +309,18 @@ fn parts_are_halved_by_triangles_and_leave_no_side_over_the_limit() {
     let sides = |seams: &[[u32; 2]]| -> Vec<usize> {
         build_charts(&mesh, seams, None).iter().map(|c| c.triangles.len()).collect()
     };
-    // No limit: the waist, the cheapest loop.
+    // The pipeline's split: the waist, the cheapest loop.
+    let area_split = split::spectral_halve(&graph, &cost, &chart).expect("the area split works on a tube");
+    let area_tris = sides(&area_split.seams);
+    assert_eq!(area_tris.len(), 2, "{area_tris:?}");
+    let small = *area_tris.iter().min().unwrap() as f64 / total as f64;
+    assert!(small < 0.3, "the split is not at the waist: sides {area_tris:?}");
+    // No limit: the waist leaves an unbalanced side; the parts are balanced.
     let free = split::halve_into_parts(&graph, &cost, &chart, &avoid, &f, usize::MAX);
     let tris = sides(&free);
     assert_eq!(tris.len(), 2, "{tris:?}");
-    let small = *tris.iter().min().unwrap() as f64 / total as f64;
-    assert!(small < 0.3, "without a limit the cut is not at the waist: sides {tris:?}");
+    let large = *tris.iter().max().unwrap() as f64 / total as f64;
+    assert!(large <= split::BALANCED_SHARE, "parts without a limit are not balanced: sides {tris:?}");
     // A limit of 0.65 of the triangles: no side at or over it, one loop around the tube.
     let limit = (0.65 * total as f64) as usize;
     let parts = split::halve_into_parts(&graph, &cost, &chart, &avoid, &f, limit);
@@ -330,8 +337,6 @@ fn parts_are_halved_by_triangles_and_leave_no_side_over_the_limit() {
     // (the dense half holds two thirds of the triangles on half the length).
     let share = tris[0] as f64 / total as f64;
     assert!((share - 0.5).abs() <= 0.1 + 1e-9, "triangle share {share:.3}: {tris:?}");
-    let area_split = split::spectral_halve(&graph, &cost, &chart).expect("the area split works on a tube");
-    let area_tris = sides(&area_split.seams);
     let area_share = area_tris[0] as f64 / total as f64;
     assert!((area_share - 0.5).abs() > (share - 0.5).abs(), "by area {area_tris:?}, by triangles {tris:?}");
 }

@@ -108,6 +108,7 @@ impl Context<'_, '_> {
 }
 
 /// One solved piece of the output: an input chart as built, or a piece of it made by cuts.
+#[derive(Clone)]
 pub struct Piece {
     /// The rebuilt chart, or `None` for the input chart itself.
     pub chart: Option<Chart>,

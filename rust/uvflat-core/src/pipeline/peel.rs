@@ -41,6 +41,13 @@
 //! left one island of 38,656 faces whose outline crossed itself, and `scaffold` stalled on
 //! it; peeled, it is three islands that keep the rule.
 //!
+//! A piece that folds at a few faces (flipped or zero-area UV triangles in at most
+//! [`MAX_FLIPPED_FACES`] faces) is peeled the same way once the repair has done all it can,
+//! when the last resort does not bring it within the rule ([`apply_flips`], from
+//! `super::repair`): the patch is the faces within `r` rings of the folded faces' corners,
+//! with the fewest faces that join it to the piece's outline (so the rest stays a disk, not a
+//! ring around a hole); `arap` on a surface with collapsed triangles is the case met.
+//!
 //! Bounded: at most `3 × RINGS.len()` rebuilds of a piece. Deterministic: overlapping pairs
 //! and sides in index order, rings and borders in face order.
 
@@ -73,6 +80,9 @@ pub const MAX_PATCH_SHARE: f64 = 0.25;
 /// The note a peeled piece's report carries.
 const NOTE: &str = "its outline crossed itself: the faces there were made an island of their own";
 
+/// The note a piece peeled for its flips carries ([`apply_flips`]).
+const FLIPS_NOTE: &str = "some of its triangles folded: the faces there were made an island of their own";
+
 /// Peel every piece of `pieces` that qualifies (see the module docs); `original`: the chart
 /// a piece without a chart of its own stands for.
 pub fn apply(ctx: &Context<'_, '_>, original: &Chart, base_seams: &[[u32; 2]], pieces: &mut Vec<Piece>) {
@@ -88,6 +98,37 @@ pub(super) fn apply_from(
     pieces: &mut Vec<Piece>,
     min_triangles: usize,
 ) {
+    apply_to(ctx, original, base_seams, pieces, min_triangles, Problem::Overlap);
+}
+
+/// Peel the faces with flipped or zero-area UV triangles out of every piece that
+/// [`folds_at_few`] faces (see the module docs).
+pub(super) fn apply_flips(ctx: &Context<'_, '_>, original: &Chart, base_seams: &[[u32; 2]], pieces: &mut Vec<Piece>) {
+    apply_to(ctx, original, base_seams, pieces, 0, Problem::Flips);
+}
+
+/// Whether the first problem of `piece` is flipped or zero-area UV triangles, in at most
+/// [`MAX_FLIPPED_FACES`] faces.
+pub(super) fn folds_at_few(ctx: &Context<'_, '_>, piece: &Piece) -> bool {
+    ctx.rule.full
+        && ctx.rule.broken(&piece.report) == Some(Problem::Flips)
+        && piece.face_flips.iter().filter(|&&n| n > 0).count() <= MAX_FLIPPED_FACES
+}
+
+/// Most faces with flipped or zero-area UV triangles a piece may have to be peeled
+/// ([`apply_flips`]): more is a map that folds, not a few faces that do.
+pub const MAX_FLIPPED_FACES: usize = 64;
+
+/// [`apply_from`] for pieces whose first problem is `problem` (an outline that crosses itself,
+/// or flips).
+fn apply_to(
+    ctx: &Context<'_, '_>,
+    original: &Chart,
+    base_seams: &[[u32; 2]],
+    pieces: &mut Vec<Piece>,
+    min_triangles: usize,
+    problem: Problem,
+) {
     let mut k = 0;
     while k < pieces.len() {
         let replaced = {
@@ -95,7 +136,8 @@ pub(super) fn apply_from(
             let chart = p.chart.as_ref().unwrap_or(original);
             let due = chart.triangles.len() >= min_triangles
                 && p.report.status.mapped()
-                && ctx.rule.broken(&p.report) == Some(Problem::Overlap)
+                && ctx.rule.broken(&p.report) == Some(problem)
+                && (problem != Problem::Flips || folds_at_few(ctx, p))
                 && !super::pinned(ctx, chart);
             if due {
                 peel(ctx, chart, base_seams, p)
@@ -141,12 +183,29 @@ fn peel(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], piece: &P
     // Where the outline crosses itself, the triangles on its two sides overlap (often along
     // a strip, not at one point): the patch holds the overlapping triangles of one side. An
     // outline that only touches itself overlaps no triangle: the patch holds the touching
-    // segments of one side.
-    let overlapping = overlap_sides(chart, uv);
-    let loops = &chart.boundary_loops;
-    let touching =
-        crate::metrics::closed_seams::outline_crossings(&chart.positions, &chart.triangles, uv, loops, MAX_TOUCHES);
-    let mut sides: Vec<Vec<u32>> = if overlapping.iter().all(|s| s.is_empty()) {
+    // segments of one side. A piece that folds (the repair's step before its last resort)
+    // has one side: the corners of its folded faces.
+    let folds = piece.report.flips > 0;
+    let (overlapping, touching) = if folds {
+        ([Vec::new(), Vec::new()], Vec::new())
+    } else {
+        let loops = &chart.boundary_loops;
+        let touching =
+            crate::metrics::closed_seams::outline_crossings(&chart.positions, &chart.triangles, uv, loops, MAX_TOUCHES);
+        (overlap_sides(chart, uv), touching)
+    };
+    let mut sides: Vec<Vec<u32>> = if folds {
+        let mut corners: Vec<u32> = piece
+            .face_flips
+            .iter()
+            .zip(&polygons)
+            .filter(|(&n, _)| n > 0)
+            .flat_map(|(_, poly)| poly.iter().copied())
+            .collect();
+        corners.sort_unstable();
+        corners.dedup();
+        vec![corners]
+    } else if overlapping.iter().all(|s| s.is_empty()) {
         [0, 1].map(|k| touching.iter().flat_map(|c| c[k]).collect()).to_vec()
     } else {
         overlapping.to_vec()
@@ -163,7 +222,12 @@ fn peel(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], piece: &P
     }
     for seeds in sides.iter().filter(|s| !s.is_empty()) {
         for &r in &RINGS {
-            let patch = rings(&polygons, &vertex_faces, &seeds, r);
+            let mut patch = rings(&polygons, &vertex_faces, seeds, r);
+            if folds {
+                // Faces that fold inside the piece: the patch reaches the outline, so the rest
+                // stays a disk rather than a ring around it.
+                reach_outline(chart, &polygons, &vertex_faces, &mut patch);
+            }
             if patch.iter().filter(|&&x| x).count() > limit {
                 break;
             }
@@ -403,20 +467,69 @@ fn keep_uvs(
     let fell_back = piece.report.method != ctx.options.method.name();
     report.status = if fell_back { ChartStatus::Fallback } else { ChartStatus::Solved };
     report.problem = fell_back.then_some(Problem::FellBack);
-    // The piece's note without the overlap the rule found (it is gone).
+    // The piece's note without the overlap or flips the rule found (they are gone).
+    let (found, note) = if piece.report.flips > 0 {
+        (super::solve::flips_note(piece.report.flips), FLIPS_NOTE)
+    } else {
+        (super::solve::OVERLAP_NOTE.to_string(), NOTE)
+    };
     report.reason = piece
         .report
         .reason
         .as_deref()
-        .map(|r| r.trim_end_matches(super::solve::OVERLAP_NOTE).trim_end_matches("; ").to_string())
+        .map(|r| r.trim_end_matches(found.as_str()).trim_end_matches("; ").to_string())
         .filter(|r| !r.is_empty());
-    super::solve::append(&mut report.reason, NOTE.to_string());
+    super::solve::append(&mut report.reason, note.to_string());
     report.iterations = piece.report.iterations;
     report.residual = piece.report.residual;
     report.seconds = piece.report.seconds;
     match measure(c, &new_uv, &mut report, &ctx.rule) {
         Some(flips) => (report, Some(new_uv), flips),
         None => (report, None, Vec::new()),
+    }
+}
+
+/// Add to `patch` (faces of `chart`, `polygons` their corners) the fewest faces, joined by
+/// edges, that join it to the chart's outline (nothing when a face of the patch touches the
+/// outline already). Deterministic: breadth-first in face order.
+fn reach_outline(chart: &Chart, polygons: &[Vec<u32>], vertex_faces: &[Vec<u32>], patch: &mut [bool]) {
+    let mut on_outline = vec![false; chart.positions.len()];
+    for &v in chart.boundary_loops.iter().flatten() {
+        on_outline[v as usize] = true;
+    }
+    let touches = |f: usize| polygons[f].iter().any(|&v| on_outline[v as usize]);
+    let mut from = vec![u32::MAX; polygons.len()];
+    let mut queue = std::collections::VecDeque::new();
+    for f in 0..polygons.len() {
+        if patch[f] {
+            if touches(f) {
+                return;
+            }
+            from[f] = f as u32;
+            queue.push_back(f);
+        }
+    }
+    while let Some(f) = queue.pop_front() {
+        let poly = &polygons[f];
+        for i in 0..poly.len() {
+            let (a, b) = (poly[i] as usize, poly[(i + 1) % poly.len()] as usize);
+            for &g in &vertex_faces[a] {
+                let g = g as usize;
+                if from[g] != u32::MAX || !vertex_faces[b].contains(&(g as u32)) {
+                    continue;
+                }
+                from[g] = f as u32;
+                if touches(g) {
+                    let mut k = g;
+                    while !patch[k] {
+                        patch[k] = true;
+                        k = from[k] as usize;
+                    }
+                    return;
+                }
+                queue.push_back(g);
+            }
+        }
     }
 }
 
@@ -541,20 +654,27 @@ mod tests {
         (positions, corners, sizes, uvs)
     }
 
+    /// `pieces` is `chart` peeled once: two pieces or more, every face in one of them, every one
+    /// within `rule`. Returns the largest (the rest).
+    fn assert_peeled<'p>(ctx: &Context<'_, '_>, chart: &Chart, rule: &AtlasRule, pieces: &'p [Piece]) -> &'p Piece {
+        assert!(pieces.len() >= 2, "not peeled: {:?}", pieces[0].report.reason);
+        assert_eq!(ctx.clock.get().peels, 1);
+        let faces: usize = pieces.iter().map(|p| p.report.faces).sum();
+        assert_eq!(faces, chart.faces.len(), "faces lost or doubled");
+        for p in pieces {
+            assert!(p.report.status.mapped() && rule.broken(&p.report).is_none(), "{:?}", p.report.reason);
+        }
+        pieces.iter().max_by_key(|p| p.report.faces).unwrap()
+    }
+
     #[test]
     fn a_coiled_strip_is_peeled_where_its_ends_overlap_and_keeps_the_rest_of_its_map() {
         let turn = 2.0 * std::f64::consts::PI * 1.03;
         let (positions, corners, sizes, vertex_uv) = coiled_strip(400, 3, turn, 10.0);
         let mesh = crate::mesh::PolyMesh::new(&positions, &corners, &sizes).unwrap();
-        let charts = crate::charts::build_charts(&mesh, &[], None);
-        assert_eq!(charts.len(), 1);
-        let chart = charts.into_iter().next().unwrap();
-        let uv: Vec<[f64; 2]> = chart.mesh_vertex.iter().map(|&v| vertex_uv[v as usize]).collect();
+        let (chart, report, flips, uv) = measured_piece(&mesh, &vertex_uv);
         let options = UnwrapOptions::default();
         let rule = AtlasRule { max_stretch: options.auto_seams.max_stretch, full: true };
-        let mut report = ChartReport::new(&chart, options.method.name());
-        report.status = ChartStatus::Solved;
-        let flips = measure(&chart, &uv, &mut report, &rule).unwrap();
         // The premise: flip-free and within the density bound, but the outline crosses itself.
         assert_eq!(report.flips, 0);
         assert_eq!(rule.broken(&report), Some(Problem::Overlap), "{:?}", report.reason);
@@ -568,16 +688,9 @@ mod tests {
             pieces
         };
         let pieces = run();
-        assert!(pieces.len() >= 2, "not peeled: {:?}", pieces[0].report.reason);
-        assert_eq!(ctx.clock.get().peels, 1);
-        let faces: usize = pieces.iter().map(|p| p.report.faces).sum();
-        assert_eq!(faces, chart.faces.len(), "faces lost or doubled");
-        for p in &pieces {
-            assert!(p.report.status.mapped() && rule.broken(&p.report).is_none(), "{:?}", p.report.reason);
-        }
         // The largest piece is the rest of the strip with its UVs exactly as they were, and
         // the patch is small.
-        let rest = pieces.iter().max_by_key(|p| p.report.faces).unwrap();
+        let rest = assert_peeled(&ctx, &chart, &rule, &pieces);
         assert!(rest.report.faces as f64 >= (1.0 - MAX_PATCH_SHARE) * chart.faces.len() as f64);
         let rest_chart = rest.chart.as_ref().unwrap();
         let rest_uv = rest.uv.as_ref().unwrap();
@@ -594,6 +707,92 @@ mod tests {
             assert_eq!(a.uv, b.uv);
             assert_eq!(a.seams, b.seams);
         }
+    }
+
+    /// A flat 20 × 20 grid mapped by its own plane, with the UVs of inner `vertices` (column,
+    /// row) moved past their neighbours (`push` grid steps along x): the faces around fold.
+    fn folded_grid(push: f64, vertices: &[(usize, usize)]) -> (Vec<[f64; 3]>, Vec<u32>, Vec<u32>, Vec<[f64; 2]>) {
+        let n = 20;
+        let (positions, corners, sizes) = crate::pipeline::test_mesh::grid(n, n, 1.0, 1.0);
+        let mut uv: Vec<[f64; 2]> = positions.iter().map(|p| [p[0], p[1]]).collect();
+        for &(i, j) in vertices {
+            let v = j * (n + 1) + i;
+            uv[v][0] += push;
+            uv[v][1] += 0.3;
+        }
+        (positions, corners, sizes, uv)
+    }
+
+    type Measured = (Chart, ChartReport, Vec<u32>, Vec<[f64; 2]>);
+
+    /// The one chart of `mesh`, its UVs from `vertex_uv`, its report held to the full rule and
+    /// its flips per face.
+    fn measured_piece(mesh: &crate::mesh::PolyMesh<'_>, vertex_uv: &[[f64; 2]]) -> Measured {
+        let charts = crate::charts::build_charts(mesh, &[], None);
+        assert_eq!(charts.len(), 1);
+        let chart = charts.into_iter().next().unwrap();
+        let uv: Vec<[f64; 2]> = chart.mesh_vertex.iter().map(|&v| vertex_uv[v as usize]).collect();
+        let options = UnwrapOptions::default();
+        let rule = AtlasRule { max_stretch: options.auto_seams.max_stretch, full: true };
+        let mut report = ChartReport::new(&chart, options.method.name());
+        report.status = ChartStatus::Solved;
+        let flips = measure(&chart, &uv, &mut report, &rule).unwrap();
+        (chart, report, flips, uv)
+    }
+
+    #[test]
+    fn a_piece_that_folds_at_a_few_faces_is_peeled_there_and_keeps_the_rest_of_its_map() {
+        let (positions, corners, sizes, vertex_uv) = folded_grid(2.5, &[(9, 7)]);
+        let mesh = crate::mesh::PolyMesh::new(&positions, &corners, &sizes).unwrap();
+        let (chart, report, flips, uv) = measured_piece(&mesh, &vertex_uv);
+        let options = UnwrapOptions::default();
+        let rule = AtlasRule { max_stretch: options.auto_seams.max_stretch, full: true };
+        // The premise: a few faces fold, and that is the first problem.
+        let folded = flips.iter().filter(|&&k| k > 0).count();
+        assert!((1..=MAX_FLIPPED_FACES).contains(&folded), "{folded} faces fold");
+        assert_eq!(rule.broken(&report), Some(Problem::Flips), "{:?}", report.reason);
+        let pins = std::collections::HashMap::new();
+        let avoid = vec![false; mesh.n_vertices()];
+        let ctx = Context::new(&mesh, None, &pins, &options, &avoid);
+        let piece = Piece::new(Some(chart.clone()), report.clone(), Some(uv.clone()), flips.clone(), Vec::new());
+        assert!(folds_at_few(&ctx, &piece));
+        let mut pieces = vec![piece];
+        apply_flips(&ctx, &chart, &[], &mut pieces);
+        // The rest keeps its UVs exactly, says why it was peeled, and no longer reports flips.
+        let rest = assert_peeled(&ctx, &chart, &rule, &pieces);
+        // The patch: the faces around the fold and a strip to the outline (7 rows away).
+        let patch = chart.faces.len() - rest.report.faces;
+        assert!(patch <= chart.faces.len() / 20, "a patch of {patch} faces");
+        let rest_chart = rest.chart.as_ref().unwrap();
+        let rest_uv = rest.uv.as_ref().unwrap();
+        for (v, &m) in rest_chart.mesh_vertex.iter().enumerate() {
+            let k = chart.mesh_vertex.iter().position(|&x| x == m).unwrap();
+            assert_eq!(rest_uv[v], uv[k], "vertex {m} moved");
+        }
+        let why = rest.report.reason.as_deref().unwrap_or_default();
+        assert!(why.contains(FLIPS_NOTE) && !why.contains("flipped or zero-area"), "{why}");
+    }
+
+    #[test]
+    fn a_piece_that_folds_at_many_faces_is_not_peeled() {
+        // Every third vertex of every other inner row folds its faces: a map that folds, not a
+        // few faces that do.
+        let pushed: Vec<(usize, usize)> =
+            (2..18).step_by(2).flat_map(|j| (1..19).step_by(3).map(move |i| (i, j))).collect();
+        let (positions, corners, sizes, vertex_uv) = folded_grid(2.5, &pushed);
+        let mesh = crate::mesh::PolyMesh::new(&positions, &corners, &sizes).unwrap();
+        let (chart, report, flips, uv) = measured_piece(&mesh, &vertex_uv);
+        assert!(flips.iter().filter(|&&k| k > 0).count() > MAX_FLIPPED_FACES);
+        let options = UnwrapOptions::default();
+        let pins = std::collections::HashMap::new();
+        let avoid = vec![false; mesh.n_vertices()];
+        let ctx = Context::new(&mesh, None, &pins, &options, &avoid);
+        let mut pieces = vec![Piece::new(Some(chart.clone()), report, Some(uv.clone()), flips, Vec::new())];
+        assert!(!folds_at_few(&ctx, &pieces[0]));
+        apply_flips(&ctx, &chart, &[], &mut pieces);
+        assert_eq!(pieces.len(), 1);
+        assert_eq!(pieces[0].uv.as_ref(), Some(&uv));
+        assert_eq!(ctx.clock.get().peels, 0);
     }
 
     #[test]

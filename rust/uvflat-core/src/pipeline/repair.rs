@@ -14,9 +14,10 @@
 //! several cones at once, the rounds go back to the best attempt and add one cone at a time;
 //! after one cone, they end and the chart is split (each round is a whole solve). A first
 //! map far from a plan whose prediction keeps the rule ([`FAR_FROM_PLAN`]) gets no cone
-//! rounds: the chart is split (`Phases::far_splits`). An attempt
-//! whose only problem is an outline that crosses itself gets one more round with one cone at
-//! most (several cones rarely uncross an outline; a split does), except on a large chart
+//! rounds, nor does the first map of a large chart under a conformal method that breaks only
+//! the density bound ([`CONE_ROUNDS_BELOW`]): the chart is split (`Phases::far_splits`). An
+//! attempt whose only problem is an outline that crosses itself gets one more round with one
+//! cone at most (several cones rarely uncross an outline; a split does), except on a large chart
 //! (`OUTLINE_RETRY_BELOW`), where that round is a costly solve that did not help. The
 //! best attempt is kept (fewest failures, flips, overlaps, non-disks, then the least area
 //! beyond the density bound, then the fewest pieces). When no round keeps the rule, the chart
@@ -34,9 +35,11 @@
 //! [`MEAN_AREA_GAIN`]; otherwise the rounds solve the chart and the same halves are weighed
 //! against it at the split stage (counted in `Phases::predicted_splits`).
 //! Pieces that still break the rule when every split level has had its try are mapped by the
-//! method's flip-free kin or `scaffold` ([`super::last_resort`]); under an area-balancing
-//! method (SLIM, ARAP, scaffold) an outline that crosses itself is handed to `scaffold` before
-//! the split, on charts below [`super::last_resort::BEFORE_SPLIT_BELOW`] triangles.
+//! method's flip-free kin or `scaffold` ([`super::last_resort`]); a piece that folds at a few
+//! faces and that the last resort leaves beyond the rule is peeled there instead
+//! ([`super::peel`]). Under an area-balancing method (SLIM, ARAP, scaffold) an outline that
+//! crosses itself is handed to `scaffold` before the split, on charts below
+//! [`super::last_resort::BEFORE_SPLIT_BELOW`] triangles.
 //!
 //! Bounded: at most `1 + REPAIR_ROUNDS` solves per chart and level, `MAX_SPLIT_DEPTH` levels.
 //! `Phases` counts them (`benchmark.py --phases`).
@@ -308,6 +311,10 @@ pub fn repair<'a>(
         // the best attempt and adds one (at its most crushed region); otherwise the rounds end
         // (more cones where they did not help cost a whole solve each; the chart is split).
         let far = round == 0 && plan_kept && far_from_plan(&pieces);
+        // A large chart under a method whose cuts are planned on the prediction, whose first map
+        // folds or breaks the density bound: see [`CONE_ROUNDS_BELOW`].
+        let balances = ctx.options.method.balances_area();
+        let large = round == 0 && no_cone_rounds(chart.triangles.len(), balances, badness(ctx, &pieces));
         let progress = best.is_empty() || clearly_better(ctx, &pieces, &best);
         if best.is_empty() || better(ctx, &pieces, &best) {
             best = pieces;
@@ -326,11 +333,12 @@ pub fn repair<'a>(
             again = 1;
             continue;
         }
-        if far {
+        if far || large {
             // The plan's flattening keeps the rule and the method's map is far from it (a
             // linear conformal map's free boundary crushing a region the prediction does
             // not): cones placed on the prediction do not bring it back, a split does
             // (`lscm` on the camel head: 13 whole solves, against 26 with the cone rounds).
+            // On a large chart a cone round is a whole solve that did not help where measured.
             if depth < cuts::MAX_SPLIT_DEPTH && chart.faces.len() >= 2 {
                 ctx.clock.add(|p| p.far_splits += 1);
             }
@@ -398,13 +406,43 @@ pub fn repair<'a>(
     if depth == 0 && !all_valid(ctx, &best) {
         // Only once every split level has had its try with the method (a half fixed by the
         // last resort would end the search for a split the method maps within the rule).
-        super::last_resort::apply(ctx, chart, &mut best, "its cones and splits");
+        last_resort(ctx, chart, base_seams, &mut best, "its cones and splits");
         // A piece of any size whose outline still crosses itself (the last resort's
         // `scaffold` stalled, as on surface folded in 3D) is peeled: its map is kept, the
         // faces where it crosses become islands of their own.
         super::peel::apply_from(ctx, chart, base_seams, &mut best, 0);
     }
     best
+}
+
+/// The last resort ([`super::last_resort::apply`]) for the pieces of `pieces` that break the
+/// rule; a piece that folds at a few faces ([`super::peel::folds_at_few`]) and that the last
+/// resort leaves beyond the rule is peeled instead ([`super::peel::apply_flips`]) when that
+/// keeps it: its map by the method is kept, the faces that fold become an island of their own
+/// (`arap` on the camel's head with a vertex collapsed onto a neighbour in 1% of its
+/// triangles: a piece of 2,568 faces with one zero-area UV triangle, which `scaffold` mapped
+/// with 35.5% of its area outside the density bound; peeled, pieces of 2,555 and 13 faces that
+/// keep the rule).
+fn last_resort(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], pieces: &mut Vec<Piece>, tried: &str) {
+    let mut out: Vec<Piece> = Vec::with_capacity(pieces.len());
+    for mut piece in pieces.drain(..) {
+        if !super::peel::folds_at_few(ctx, &piece) {
+            super::last_resort::apply(ctx, chart, std::slice::from_mut(&mut piece), tried);
+            out.push(piece);
+            continue;
+        }
+        let mut resorted = vec![piece.clone()];
+        super::last_resort::apply(ctx, chart, &mut resorted, tried);
+        if !all_valid(ctx, &resorted) {
+            let mut peeled = vec![piece];
+            super::peel::apply_flips(ctx, chart, base_seams, &mut peeled);
+            if all_valid(ctx, &peeled) {
+                resorted = peeled;
+            }
+        }
+        out.extend(resorted);
+    }
+    *pieces = out;
 }
 
 /// The split's candidates, and the halves along the first with the seams they were cut along.
@@ -535,6 +573,30 @@ fn far_from_plan(pieces: &[Piece]) -> bool {
 /// fertility subdivided three times 10.3 s against 11.6 s at the same 1.10 GB (one run each,
 /// `examples/scan_phases.rs` on the meshes of `blender_scripts/scan_benchmark.py`).
 pub const SEQUENTIAL_HALVES_FROM: usize = 100_000;
+
+/// A chart of at least this many triangles, under a method whose cuts are planned on the
+/// prediction (not one that balances area), whose first map folds or breaks the density bound
+/// (an outline that only crosses itself has its own rule, [`OUTLINE_RETRY_BELOW`]) gets no
+/// cone rounds: it is split (counted in `Phases::far_splits`). Each round is a whole solve of
+/// the chart, and on the charts measured from this size none kept the rule: 10 rounds on 4
+/// charts (`lscm` on the camel's head subdivided twice, 363k triangles with a flip and 22% of
+/// it outside the bound, then 28%, 30% and 28% with more cones, 8.5 s of solves; on the lion
+/// subdivided twice, a half of 170k with two flips and 16.6% outside, then 18.7%, 18.2% and
+/// 18.2%; on the beetle subdivided twice, a half of 324k at 8.2% three times, 5.9 s; `abf` on
+/// the camel's head subdivided twice by Blender, a half of 211k at 5.5%, then 6.1% and 8.6%,
+/// 2.7 s). Three of them kept their first attempt as their best, so their split is the one
+/// made before; the lion's half kept a later one, and its split now leaves the same islands
+/// with seams 4% shorter. Below this size rounds do help: `lscm` on a quarter of 113k of that
+/// camel's head, 11% then 0.1% with one more cone; `abf` on the lion's half of 97k, 6.0%,
+/// 6.3%, then 1.7% (`examples/scan_phases.rs`).
+pub const CONE_ROUNDS_BELOW: usize = 150_000;
+
+/// Whether a chart of `triangles` whose first map has `badness` ([`badness`]) goes to the split
+/// without cone rounds ([`CONE_ROUNDS_BELOW`]; `balances_area`: the method's).
+fn no_cone_rounds(triangles: usize, balances_area: bool, badness: ((usize, usize, usize, usize), f64)) -> bool {
+    let ((failed, flips, _, not_disk), excess) = badness;
+    triangles >= CONE_ROUNDS_BELOW && !balances_area && failed == 0 && not_disk == 0 && (flips > 0 || excess > 0.0)
+}
 
 /// A chart of at least this many triangles whose only problem is an outline that crosses
 /// itself goes straight to the split, without the one-cone round smaller charts get: that
@@ -788,6 +850,24 @@ mod tests {
     /// Every vertex of a piece maps to the vertex of the chart it was cut from that stands for
     /// the same mesh vertex, whether the chart's corners are a run of the mesh's (the dense
     /// map) or two faces far apart in its face list (the hash map).
+    #[test]
+    fn large_charts_that_fold_or_break_the_density_bound_skip_their_cone_rounds() {
+        let n = CONE_ROUNDS_BELOW;
+        let density = ((0, 0, 0, 0), 0.01);
+        let folds = ((0, 3, 1, 0), 0.0);
+        let outline = ((0, 0, 1, 0), 0.0);
+        assert!(no_cone_rounds(n, false, density));
+        assert!(no_cone_rounds(n, false, folds));
+        // Smaller charts, area-balancing methods, an outline that only crosses itself (its own
+        // rule), a piece not mapped or not a disk, and a map that keeps the rule: rounds as before.
+        assert!(!no_cone_rounds(n - 1, false, density));
+        assert!(!no_cone_rounds(n, true, density));
+        assert!(!no_cone_rounds(n, false, outline));
+        assert!(!no_cone_rounds(n, false, ((1, 0, 0, 0), 0.01)));
+        assert!(!no_cone_rounds(n, false, ((0, 0, 0, 1), 0.01)));
+        assert!(!no_cone_rounds(n, false, ((0, 0, 0, 0), 0.0)));
+    }
+
     #[test]
     fn piece_vertices_map_to_the_chart_vertex_of_the_same_mesh_vertex() {
         let n = 200;

@@ -99,11 +99,16 @@ pub fn measure(chart: &Chart, uv: &[[f64; 2]], report: &mut ChartReport, rule: &
 /// What [`hold_to`] appends to the reason of a report whose outline crosses itself.
 pub const OVERLAP_NOTE: &str = "the island's outline crosses itself";
 
+/// What [`hold_to`] appends to the reason of a report with `flips` flipped triangles.
+pub fn flips_note(flips: usize) -> String {
+    format!("{flips} flipped or zero-area UV triangle(s)")
+}
+
 /// Mark a mapped report [`ChartStatus::Invalid`] when it breaks `rule`, saying how.
 pub fn hold_to(rule: &AtlasRule, report: &mut ChartReport) {
     let Some(problem) = rule.broken(report) else { return };
     let what = match problem {
-        Problem::Flips => format!("{} flipped or zero-area UV triangle(s)", report.flips),
+        Problem::Flips => flips_note(report.flips),
         Problem::Overlap => OVERLAP_NOTE.to_string(),
         Problem::NotDisk => format!(
             "the island is not a disk ({} boundary loop(s), genus {})",
