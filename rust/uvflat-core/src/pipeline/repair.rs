@@ -14,8 +14,8 @@
 //! several cones at once, the rounds go back to the best attempt and add one cone at a time;
 //! after one cone, they end and the chart is split (each round is a whole solve). A first
 //! map far from a plan whose prediction keeps the rule ([`FAR_FROM_PLAN`]) gets no cone
-//! rounds, nor does the first map of a large chart under a conformal method that breaks only
-//! the density bound ([`CONE_ROUNDS_BELOW`]): the chart is split (`Phases::far_splits`). An
+//! rounds, nor does the first map of a large chart under a conformal method that folds or
+//! breaks the density bound ([`CONE_ROUNDS_BELOW`]): the chart is split (`Phases::far_splits`). An
 //! attempt whose only problem is an outline that crosses itself gets one more round with one
 //! cone at most (several cones rarely uncross an outline; a split does), except on a large chart
 //! (`OUTLINE_RETRY_BELOW`), where that round is a costly solve that did not help. The
@@ -847,9 +847,6 @@ mod tests {
         (positions, corner_verts, vec![4; order.len()])
     }
 
-    /// Every vertex of a piece maps to the vertex of the chart it was cut from that stands for
-    /// the same mesh vertex, whether the chart's corners are a run of the mesh's (the dense
-    /// map) or two faces far apart in its face list (the hash map).
     #[test]
     fn large_charts_that_fold_or_break_the_density_bound_skip_their_cone_rounds() {
         let n = CONE_ROUNDS_BELOW;
@@ -868,6 +865,9 @@ mod tests {
         assert!(!no_cone_rounds(n, false, ((0, 0, 0, 0), 0.0)));
     }
 
+    /// Every vertex of a piece maps to the vertex of the chart it was cut from that stands for
+    /// the same mesh vertex, whether the chart's corners are a run of the mesh's (the dense
+    /// map) or two faces far apart in its face list (the hash map).
     #[test]
     fn piece_vertices_map_to_the_chart_vertex_of_the_same_mesh_vertex() {
         let n = 200;
