@@ -786,15 +786,21 @@ def test_real_alligator_near_developable():
     assert abs(m.conformal - rep.conformal) < 1e-9
 
 
+def _robustness():
+    """``blender_scripts/robustness.py``, whose variants stand for the meshes users bring."""
+    from pathlib import Path
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "blender_scripts"))
+    import robustness
+    return robustness
+
+
 @pytest.mark.parametrize("method", ["abf", "slim"])
 def test_small_islands_are_laid_on_the_islands_around_them(method):
     """3holes with three large holes: the cuts joining the holes leave a few faces between
     them and the outline as islands of their own (28 of the 34 islands had under 10 faces).
     Their faces are laid on the islands around them where they fit: few islands, every one
     keeps the rule, and the seams reported are exactly the islands' borders."""
-    from pathlib import Path
-    sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "blender_scripts"))
-    import robustness
+    robustness = _robustness()
     pos, cv, fs = robustness.holes(read_mesh("3holes.off"), 3, 600, 2)
     r = uvflat.unwrap(pos, cv, fs, method=method)
     assert r.phases["glued"] >= 10, r.phases
@@ -815,9 +821,7 @@ def test_arap_on_collapsed_triangles_keeps_the_rule_by_peeling_the_faces_that_fo
     triangle after every split, and its last resort (``scaffold``) left 35.5% of it outside the
     density bound. The faces that fold are peeled into an island of their own instead: every
     island keeps the rule, and the piece keeps its ``arap`` map with a note that says why."""
-    from pathlib import Path
-    sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "blender_scripts"))
-    import robustness
+    robustness = _robustness()
     pos, cv, fs = robustness.collapsed(read_mesh("camelhead.off"), 0.01, 5)
     r = uvflat.unwrap(pos, cv, fs, method="arap")
     m = uvflat.metrics(pos, cv, fs, r.uv)

@@ -199,8 +199,8 @@ impl PyUnwrapResult {
     /// cut along their creases first), ``predicted_splits`` (splits made
     /// before any solve, the chart's predicted mean area distortion being too high),
     /// ``far_splits`` (charts split after one solve, the method's map being far from a plan
-    /// predicted to keep the rule, or a large chart's map beyond the rule under a conformal
-    /// method), ``parts`` (repair rounds whose pieces of 250,000 triangles or more were cut
+    /// predicted to keep the rule, or a large chart's map beyond the rule under a method that
+    /// does not balance area), ``parts`` (repair rounds whose pieces of 250,000 triangles or more were cut
     /// into parts solved side by side),
     /// ``peels`` (pieces whose outline crossed itself, or that folded at a few faces, made
     /// valid by making the faces there islands of their own), ``last_resort`` (solves of the last

@@ -44,8 +44,8 @@ pub struct Phases {
     pub predicted_splits: usize,
     /// Charts sent to the split after their first solve, the method's map being far from a
     /// plan whose prediction kept the rule ([`crate::pipeline::repair::FAR_FROM_PLAN`]), or
-    /// beyond the density bound on a large chart
-    /// ([`crate::pipeline::repair::CONE_ROUNDS_BELOW`]).
+    /// folding or beyond the density bound on a large chart under a method that does not balance
+    /// area ([`crate::pipeline::repair::CONE_ROUNDS_BELOW`]).
     pub far_splits: usize,
     /// Repair rounds whose large pieces were cut into parts before the solve
     /// ([`crate::pipeline::parts`]; the part seams' time is in `cut_graphs`).

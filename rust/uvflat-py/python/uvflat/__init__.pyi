@@ -220,7 +220,7 @@ class UnwrapResult:
         ``predicted_splits`` (splits made before any solve, the chart's predicted mean area
         distortion being too high), ``far_splits`` (charts split after one solve, the method's
         map being far from a plan predicted to keep the rule, or a large chart's map beyond the
-        rule under a conformal method), ``peels`` (pieces whose outline crossed itself, or that
+        rule under a method that does not balance area), ``peels`` (pieces whose outline crossed itself, or that
         folded at a few faces, made valid by making the faces there islands of their own), ``last_resort`` (solves of the last resort, the method's flip-free kin then ``scaffold``,
         for pieces whose repair still broke the atlas rule), ``glued`` (small islands whose
         faces were laid on the islands around them) and ``glue`` (its seconds)."""
