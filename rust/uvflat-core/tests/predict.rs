@@ -223,6 +223,24 @@ fn a_large_chart_beyond_the_density_bound_is_split_after_one_solve() {
     common::assert_islands_keep_the_rule(&s, "lscm", &r);
 }
 
+/// A large piece that folds at a few faces after its solve is peeled there, before more cones
+/// or a split (`pipeline/peel.rs::FLIPS_PEEL_FROM`): `arap` on the bunny subdivided twice
+/// (111,456 triangles) stops at its iteration cap with a few faces folded and its outline
+/// crossing itself, and every cone round and split left such folds (19 solves, 6 islands).
+/// Now one solve and one peel, no split, and every island keeps the rule.
+#[test]
+fn a_large_piece_that_folds_at_a_few_faces_is_peeled_after_its_solve() {
+    let Some(dir) = common::shared_meshes() else { return };
+    let s = common::subdivide(&common::subdivide(&common::load(&dir.join("bunny.off"))));
+    assert!(s.face_sizes.len() >= uvflat_core::pipeline::peel::FLIPS_PEEL_FROM);
+    let options = UnwrapOptions { method: Method::Arap(Default::default()), ..Default::default() };
+    let r = unwrap(&s.input(), &options).unwrap();
+    assert!(r.phases.peels >= 1, "{:?}", r.phases);
+    assert_eq!(r.phases.splits, 0, "{:?}", r.phases);
+    assert!(r.phases.repair_rounds <= 2, "{:?}", r.phases);
+    common::assert_islands_keep_the_rule(&s, "arap", &r);
+}
+
 /// A plan whose predicted mean area distortion stays far above the split's limit (the cow,
 /// closed, under `abf`: its rounds stall near 1.57) is split before any solve when the chart
 /// may be split, so its one-cone rounds are skipped there; where it may not (the last split

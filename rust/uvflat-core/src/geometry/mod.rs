@@ -1,7 +1,9 @@
 //! What needs positions: corner angles (robust, clamped), areas, local 2D frames;
-//! [`convex_hull`], planar hulls of point sets and of UV islands; and [`min_box`], the turn of
-//! a hull (of every island's) to its bounding box of least area.
+//! [`convex_hull`], planar hulls of point sets and of UV islands; [`min_box`], the turn of
+//! a hull (of every island's) to its bounding box of least area; and [`box_grid`], the pairs
+//! of 2D boxes that overlap.
 
+pub mod box_grid;
 pub mod convex_hull;
 pub mod min_box;
 

@@ -446,7 +446,7 @@ pub fn boundary_self_overlap(uv: &[[f64; 2]], loops: &[Vec<u32>]) -> bool {
 }
 
 /// [`boundary_self_overlap`], testing every pair of segments when there are at most
-/// `brute_force` of them and through a uniform grid otherwise.
+/// `brute_force` of them and through a grid ([`crate::geometry::box_grid`]) otherwise.
 fn self_overlap_with(uv: &[[f64; 2]], loops: &[Vec<u32>], brute_force: usize) -> bool {
     !boundary_crossings_with(uv, loops, brute_force, 1).is_empty()
 }
@@ -486,14 +486,11 @@ pub(crate) fn boundary_crossings_except(
     }
     let pair = |i: usize, j: usize| [[segs[i].0, segs[i].1], [segs[j].0, segs[j].1]];
     let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    let mut total_len = 0.0;
     for &(a, b) in &segs {
         for p in [uv[a as usize], uv[b as usize]] {
             lo = [lo[0].min(p[0]), lo[1].min(p[1])];
             hi = [hi[0].max(p[0]), hi[1].max(p[1])];
         }
-        let (pa, pb) = (uv[a as usize], uv[b as usize]);
-        total_len += (pb[0] - pa[0]).hypot(pb[1] - pa[1]);
     }
     let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]);
     if !(extent > 0.0) {
@@ -539,39 +536,25 @@ pub(crate) fn boundary_crossings_except(
         }
         return found.into_iter().map(|(i, j)| pair(i, j)).collect();
     }
-    let cell = (total_len / n as f64).max(extent / 1024.0);
-    let nx = (((hi[0] - lo[0]) / cell) as usize + 1).min(1024);
-    let ny = (((hi[1] - lo[1]) / cell) as usize + 1).min(1024);
-    let cx = |x: f64| (((x - lo[0]) / cell) as usize).min(nx - 1);
-    let cy = |y: f64| (((y - lo[1]) / cell) as usize).min(ny - 1);
-    let mut grid: std::collections::HashMap<usize, Vec<u32>> = std::collections::HashMap::new();
-    for (i, &(a, b)) in segs.iter().enumerate() {
-        let (pa, pb) = (uv[a as usize], uv[b as usize]);
-        for gx in cx(pa[0].min(pb[0]))..=cx(pa[0].max(pb[0])) {
-            for gy in cy(pa[1].min(pb[1]))..=cy(pa[1].max(pb[1])) {
-                grid.entry(gy * nx + gx).or_default().push(i as u32);
+    // Candidates from the refined grid of [`crate::geometry::box_grid`] (a crushed stretch of
+    // outline packs many segments where a uniform grid has one cell); a pair can come twice.
+    let boxes: Vec<crate::geometry::box_grid::Box2> = segs
+        .iter()
+        .map(|&(a, b)| {
+            let (pa, pb) = (uv[a as usize], uv[b as usize]);
+            ([pa[0].min(pb[0]), pa[1].min(pb[1])], [pa[0].max(pb[0]), pa[1].max(pb[1])])
+        })
+        .collect();
+    let _ = crate::geometry::box_grid::visit_pairs(&boxes, |i, j| {
+        let (i, j) = (i as usize, j as usize);
+        if crate::geometry::box_grid::share_point(boxes[i], boxes[j]) && crossing(i, j) && !found.contains(&(i, j)) {
+            found.push((i, j));
+            if found.len() >= limit {
+                return std::ops::ControlFlow::Break(());
             }
         }
-    }
-    // Buckets in cell order, so which pairs are found first does not depend on hashing.
-    let mut cells: Vec<(&usize, &Vec<u32>)> = grid.iter().collect();
-    cells.sort_unstable_by_key(|c| *c.0);
-    'cells: for (_, bucket) in cells {
-        for x in 0..bucket.len() {
-            for y in x + 1..bucket.len() {
-                let (i, j) = (bucket[x] as usize, bucket[y] as usize);
-                if crossing(i, j) {
-                    let key = (i.min(j), i.max(j));
-                    if !found.contains(&key) {
-                        found.push(key);
-                        if found.len() >= limit {
-                            break 'cells;
-                        }
-                    }
-                }
-            }
-        }
-    }
+        std::ops::ControlFlow::Continue(())
+    });
     found.sort_unstable();
     found.into_iter().map(|(i, j)| pair(i, j)).collect()
 }

@@ -37,7 +37,9 @@
 //! Pieces that still break the rule when every split level has had its try are mapped by the
 //! method's flip-free kin or `scaffold` ([`super::last_resort`]); a piece that folds at a few
 //! faces and that the last resort leaves beyond the rule is peeled there instead
-//! ([`super::peel`]). Under an area-balancing method (SLIM, ARAP, scaffold) an outline that
+//! ([`super::peel`]). A large piece (from [`super::peel::FLIPS_PEEL_FROM`] triangles) that
+//! folds at a few faces is peeled after any solve of a round, before more cones or a split.
+//! Under an area-balancing method (SLIM, ARAP, scaffold) an outline that
 //! crosses itself is handed to `scaffold` before the split, on charts below
 //! [`super::last_resort::BEFORE_SPLIT_BELOW`] triangles.
 //!
@@ -293,6 +295,11 @@ pub fn repair<'a>(
         // into parts count as large.
         let peel_from = if with_parts { super::parts::PART_FROM / 8 } else { super::peel::PEEL_FROM };
         super::peel::apply_from(ctx, chart, base_seams, &mut pieces, peel_from);
+        // So does a large piece that folds at a few faces (its outline may cross itself too):
+        // `arap` on the bunny subdivided twice folded 2–8 faces of its 111k-triangle chart in
+        // every round, each a 100-iteration solve (2.3 s), before splits took 22 s in all.
+        // (Parts count as large from the overlap peel's size.)
+        super::peel::apply_flips(ctx, chart, base_seams, &mut pieces, peel_from.min(super::peel::FLIPS_PEEL_FROM));
         ctx.clock.add(|p| {
             p.repair_solve += t.elapsed().as_secs_f64();
             p.repair_pieces += n_pieces;
@@ -435,7 +442,7 @@ fn last_resort(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], pi
         super::last_resort::apply(ctx, chart, &mut resorted, tried);
         if !all_valid(ctx, &resorted) {
             let mut peeled = vec![piece];
-            super::peel::apply_flips(ctx, chart, base_seams, &mut peeled);
+            super::peel::apply_flips(ctx, chart, base_seams, &mut peeled, 0);
             if all_valid(ctx, &peeled) {
                 resorted = peeled;
             }
