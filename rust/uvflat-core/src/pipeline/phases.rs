@@ -50,8 +50,8 @@ pub struct Phases {
     /// Repair rounds whose large pieces were cut into parts before the solve
     /// ([`crate::pipeline::parts`]; the part seams' time is in `cut_graphs`).
     pub parts: usize,
-    /// Pieces whose outline crossed itself made valid by peeling the faces at the crossings
-    /// into islands of their own ([`crate::pipeline::peel`]).
+    /// Pieces made valid by peeling the faces where their outline crossed itself or where
+    /// they folded into islands of their own ([`crate::pipeline::peel`]).
     pub peels: usize,
     /// Solves of the last resort for pieces that still broke the rule after repair: the
     /// method's flip-free kin, then `scaffold` ([`crate::pipeline::last_resort`]; each also
