@@ -235,7 +235,7 @@ impl<'a> Twins<'a> {
 /// either separates them to within `tol` (touching along an edge or at a point is no overlap;
 /// the tolerance is the one copies of a vertex are matched with, so the two sides of a seam
 /// laid within rounding of each other do not overlap).
-fn interiors_overlap(p: [[f64; 2]; 3], q: [[f64; 2]; 3], tol: f64) -> bool {
+pub(crate) fn interiors_overlap(p: [[f64; 2]; 3], q: [[f64; 2]; 3], tol: f64) -> bool {
     for tri in [p, q] {
         for k in 0..3 {
             let (a, b) = (tri[k], tri[(k + 1) % 3]);

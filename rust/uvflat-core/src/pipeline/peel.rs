@@ -405,24 +405,9 @@ fn overlapping_triangles(triangles: &[[u32; 3]], uv: &[[f64; 2]]) -> Vec<(u32, u
 }
 
 /// Whether two UV triangles' interiors overlap: no edge direction of either separates them
-/// (separating axis test; touching counts as apart).
+/// (the rule's separating-axis test with no tolerance; touching counts as apart).
 fn interiors_overlap(a: [[f64; 2]; 3], b: [[f64; 2]; 3]) -> bool {
-    for tri in [a, b] {
-        for k in 0..3 {
-            let (p, q) = (tri[k], tri[(k + 1) % 3]);
-            let axis = [q[1] - p[1], p[0] - q[0]];
-            let project = |t: [[f64; 2]; 3]| {
-                let d = t.map(|v| v[0] * axis[0] + v[1] * axis[1]);
-                (d[0].min(d[1]).min(d[2]), d[0].max(d[1]).max(d[2]))
-            };
-            let (a_lo, a_hi) = project(a);
-            let (b_lo, b_hi) = project(b);
-            if a_hi <= b_lo || b_hi <= a_lo {
-                return false;
-            }
-        }
-    }
-    true
+    crate::metrics::closed_seams::interiors_overlap(a, b, 0.0)
 }
 
 /// The rest `c` of `piece` (of `chart`) with the piece's UVs, measured again.
