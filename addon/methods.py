@@ -39,8 +39,8 @@ METHODS: tuple[MethodInfo, ...] = (
                "(Eck et al. 1995)", ("boundary",)),
     MethodInfo("mean_value", "Mean Value", "Mean-value-weight barycentric map, boundary fixed; "
                "never flips (Floater 2003)", ("boundary",)),
-    MethodInfo("lscm", "LSCM", "Least squares conformal map, free boundary "
-               "(Lévy et al. 2002)", ()),
+    MethodInfo("lscm", "LSCM", "Least squares conformal map, free boundary (Lévy et al. 2002); "
+               "without pins, fixed on the whole outline as Spectral Conformal", ()),
     MethodInfo("spectral", "Spectral Conformal", "Conformal map from a generalized eigenproblem, "
                "free boundary (Mullen et al. 2008)", ("max_iterations", "tolerance_exponent")),
     MethodInfo("abf", "ABF++", "Angle based flattening: solves for the triangle angles under the "

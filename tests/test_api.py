@@ -459,6 +459,31 @@ def test_planar_grid_lscm_is_conformal(triangles):
     assert abs(d3 - duv) < 1e-9
 
 
+def test_lscm_without_pins_is_the_spectral_map_and_with_pins_holds_them():
+    """Without pins, LSCM's free map is fixed on the whole outline (methods/lscm.rs), which is
+    spectral's map up to a similarity; two pins are held exactly, and then the map differs."""
+    pos, cv, fs = grid(12, 9, triangles=True, size=0.25)
+    x, y = pos[:, 0] - 1.5, pos[:, 1] - 1.1
+    pos = pos.copy()
+    pos[:, 2] = 0.6 * np.sin(2.1 * x) * np.cos(1.7 * y) + 0.3 * x * x
+    lscm = uvflat.unwrap(pos, cv, fs, method="lscm", auto_seams=False)
+    spectral = uvflat.unwrap(pos, cv, fs, method="spectral", auto_seams=False)
+
+    def similarity_gap(a, b):
+        # Least-squares complex similarity a -> b, then the largest gap relative to b's size.
+        za, zb = a[:, 0] + 1j * a[:, 1], b[:, 0] + 1j * b[:, 1]
+        za0, zb0 = za - za.mean(), zb - zb.mean()
+        s = np.vdot(za0, zb0) / np.vdot(za0, za0)
+        return np.abs(s * za0 - zb0).max() / np.abs(zb0).max()
+
+    assert similarity_gap(lscm.uv, spectral.uv) < 1e-6
+    corners = [0, len(cv) - 1]
+    pins = np.array([[0.0, 0.0], [3.0, 1.0]])
+    pinned = uvflat.unwrap(pos, cv, fs, method="lscm", auto_seams=False, pins=np.array(corners), pin_uvs=pins)
+    assert np.abs(pinned.uv[corners] - pins).max() < 1e-9
+    assert similarity_gap(pinned.uv, spectral.uv) > 1e-4
+
+
 @pytest.mark.parametrize("method", ["tutte", "harmonic", "mean_value", "lscm", "spectral"])
 def test_every_method_maps_a_disk_without_flips(method):
     pos, cv, fs = grid(5, 5, triangles=True)

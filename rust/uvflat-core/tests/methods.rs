@@ -239,3 +239,34 @@ fn spectral_converges_on_developable_charts_in_a_few_steps() {
     let sol = uvflat_core::methods::spectral::solve(&chart, &[], &SpectralOptions::default()).unwrap();
     assert!(sol.iterations <= 5 && sol.residual <= 1e-10, "{} iterations, residual {}", sol.iterations, sol.residual);
 }
+
+/// LSCM's two automatic pins are points, and a point has no capacity in the plane: on the
+/// bunny subdivided twice, cut along `abf`'s seams, the pinned map of the largest chart
+/// (tens of thousands of triangles) crushes most of it, so half its area falls outside [½, 2]
+/// of its density. The free map fixed on the boundary (`methods/lscm.rs::solve_free`) keeps
+/// it within the atlas rule. With automatic seams, `lscm` then needs no more than a handful of
+/// islands and no fallback (10 islands, one a fallback, with the pins).
+#[test]
+fn lscm_without_pins_does_not_crush_a_fine_chart() {
+    use uvflat_core::charts::build_charts;
+    use uvflat_core::mesh::PolyMesh;
+    use uvflat_core::methods::{chart_angles, lscm};
+    let Some(dir) = shared_meshes() else { return };
+    let s = subdivide(&subdivide(&load(&dir.join("bunny.off"))));
+    let abf = unwrap(&s.input(), &opts(Method::Abf(Default::default()))).unwrap();
+    let mesh = PolyMesh::new(&s.positions, &s.corner_verts, &s.face_sizes).unwrap();
+    let charts = build_charts(&mesh, &abf.new_seams, None);
+    let chart = charts.iter().max_by_key(|c| c.triangles.len()).unwrap();
+    assert!(chart.triangles.len() > 50_000, "the premise: a fine chart, {} triangles", chart.triangles.len());
+    let angles = chart_angles(&chart.positions, &chart.triangles);
+    let spread = |uv: &[[f64; 2]]| metrics::density::density_spread(&chart.positions, &chart.triangles, uv, 2.0);
+    let pinned = spread(&lscm::solve_with_angles(chart, &angles, &[]).unwrap().0);
+    let free = spread(&lscm::solve_free(chart, &angles, &[]).unwrap().0);
+    assert!(pinned.outside > 0.3, "the premise: two pins crush the chart, {pinned:?}");
+    assert!(free.outside < 0.05 && free.p5 > 0.4, "{free:?}");
+    let r = unwrap(&s.input(), &opts(Method::Lscm)).unwrap();
+    assert!(r.charts.len() <= 5, "{} islands", r.charts.len());
+    let statuses: Vec<ChartStatus> = r.charts.iter().map(|c| c.status).collect();
+    assert!(statuses.iter().all(|s| *s == ChartStatus::Solved), "{statuses:?}");
+    assert_islands_keep_the_rule(&s, "lscm", &r);
+}

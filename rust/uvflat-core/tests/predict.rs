@@ -210,16 +210,18 @@ fn a_map_far_from_its_plan_is_split_after_one_solve() {
 
 /// A large chart whose first map breaks the density bound under a conformal method is split
 /// without cone rounds (`pipeline/repair.rs::CONE_ROUNDS_BELOW`): the beetle subdivided twice
-/// under `lscm` (618,496 triangles), far from its plan as a whole, then a half of 323,892
-/// triangles at 8.2% outside the bound, whose three cone rounds left it there. Both go to the
-/// split after one solve, and every island keeps the rule.
+/// under `lscm` (618,496 triangles), far from its plan as a whole, goes to the split after one
+/// solve, and every island keeps the rule. (With LSCM's two automatic pins, a half of 323,892
+/// triangles also stayed at 8.2% outside the bound after three cone rounds and was split
+/// again; its free map fixed on the boundary, `methods/lscm.rs::solve_free`, does not.)
 #[test]
 fn a_large_chart_beyond_the_density_bound_is_split_after_one_solve() {
     let Some(dir) = common::shared_meshes() else { return };
     let s = common::subdivide(&common::subdivide(&common::load(&dir.join("beetle.off"))));
     assert!(s.face_sizes.len() >= 2 * uvflat_core::pipeline::repair::CONE_ROUNDS_BELOW);
     let r = unwrap(&s.input(), &UnwrapOptions { method: Method::Lscm, ..Default::default() }).unwrap();
-    assert!(r.phases.far_splits >= 2, "{:?}", r.phases);
+    assert!(r.phases.far_splits >= 1, "{:?}", r.phases);
+    assert!(r.phases.repair_rounds <= 4, "{:?}", r.phases);
     common::assert_islands_keep_the_rule(&s, "lscm", &r);
 }
 

@@ -12,8 +12,18 @@
 //!
 //! Preconditions: a chart that is a disk (possibly with holes). Pins: with two or more pinned
 //! vertices at distinct UVs, they are fixed exactly; with one, the automatic solution is
-//! translated onto it; with none, the two boundary vertices farthest apart along the chart's
-//! longest bounding-box axis are pinned (any similarity of the result is equally optimal).
+//! translated onto it. With none, the paper pins the two boundary vertices farthest apart
+//! along the chart's longest bounding-box axis ([`auto_pins`]). That is what the
+//! reconstruction of ABF's angles does ([`solve_with_angles`]), whose angles a planar map
+//! nearly satisfies, and so do the starts of ARAP, SLIM and scaffold. The method itself
+//! ([`solve`], and the start of MIPS, [`solve_free`]) does not: a pinned vertex is a point, and
+//! a point has no capacity in the plane, so on a fine mesh the energy is lowest with the
+//! chart crushed towards a point and stretched in a spike at each pin (a bunny subdivided
+//! twice, one 81k-triangle chart: 52% of its area outside [½, 2] of its density, the 5th
+//! percentile at 0.03). Its free map is fixed on the whole boundary instead: the smallest
+//! eigenvector of the energy against the boundary mass (Mullen et al. 2008, as `spectral`'s,
+//! [`super::boundary_eigen`]; 2% outside on that chart), moved by the similarity that puts the
+//! two automatic pins where they would have been pinned.
 //!
 //! Failures: a singular system (chart of disconnected pieces or all-degenerate triangles).
 
@@ -160,12 +170,36 @@ pub(crate) fn pins_span(pins: &[(u32, [f64; 2])]) -> bool {
     pins.len() >= 2 && pins.iter().any(|p| p.1 != pins[0].1)
 }
 
-/// LSCM of a chart driven by given corner angles (3D angles for plain LSCM, solved angles for
-/// ABF). Pins as described in the module docs; the returned note says how they were used.
+/// LSCM of a chart driven by given corner angles (solved angles for ABF). Pins as described in
+/// the module docs, two automatic ones when none span; the returned note says how they were
+/// used. For angles nearly consistent with a planar map (ABF's) the two pins cost nothing;
+/// for a surface's own angles see [`solve_free`].
 pub fn solve_with_angles(
     chart: &Chart,
     angles: &[[f64; 3]],
     pins: &[(u32, [f64; 2])],
+) -> Result<(Vec<[f64; 2]>, Option<String>), ChartFailure> {
+    solve_pinned_or_free(chart, angles, pins, false)
+}
+
+/// [`solve_with_angles`] for a surface's own (3D) angles: without pins spanning more than a
+/// point, the similarity of the free map is fixed on the boundary ([`free_map`]) instead of by
+/// two pinned vertices, which on a fine mesh crush the chart (module docs); the result is then
+/// moved so that the automatic pins land where they would have been pinned. Falls back to the
+/// two pins when the free map cannot be computed.
+pub fn solve_free(
+    chart: &Chart,
+    angles: &[[f64; 3]],
+    pins: &[(u32, [f64; 2])],
+) -> Result<(Vec<[f64; 2]>, Option<String>), ChartFailure> {
+    solve_pinned_or_free(chart, angles, pins, true)
+}
+
+fn solve_pinned_or_free(
+    chart: &Chart,
+    angles: &[[f64; 3]],
+    pins: &[(u32, [f64; 2])],
+    free: bool,
 ) -> Result<(Vec<[f64; 2]>, Option<String>), ChartFailure> {
     let n = chart.positions.len();
     if pins_span(pins) {
@@ -175,10 +209,16 @@ pub fn solve_with_angles(
         return Ok((s.solve(&uvs)?, None));
     }
     let auto = auto_pins(chart);
-    let s = LscmSolver::with_ordering(n, &chart.triangles, angles, &[auto[0].0, auto[1].0], chart.ordering_if_known(OrderingKind::Amd))?;
-    let mut uv = s.solve(&[auto[0].1, auto[1].1])?;
+    let mut uv = match free.then(|| free_map(chart, angles, auto)).flatten() {
+        Some(uv) => uv,
+        None => {
+            let ordering = chart.ordering_if_known(OrderingKind::Amd);
+            let s = LscmSolver::with_ordering(n, &chart.triangles, angles, &[auto[0].0, auto[1].0], ordering)?;
+            s.solve(&[auto[0].1, auto[1].1])?
+        }
+    };
     let mut note = None;
-    if pins.first().is_some() {
+    if !pins.is_empty() {
         super::nonlinear::pins::translate_onto_first_pin(&mut uv, pins);
         note = Some(if pins.len() == 1 {
             "one pinned vertex: the chart was translated onto it".to_string()
@@ -187,6 +227,42 @@ pub fn solve_with_angles(
         });
     }
     Ok((uv, note))
+}
+
+/// Most solves of [`free_map`]'s Lanczos run, and the relative residual at which it stops.
+/// Tight, because a developable chart's map must come out exact (its eigenvector stands out
+/// by a factor of about 10⁸, so two or three solves reach it); on curved charts the pieces of
+/// the bunny subdivided twice converge in 5–10 solves and those of the camel's head
+/// subdivided twice in 5–17. A chart of 292k vertices (the whole fertility statue subdivided
+/// three times) stops at the cap, 6·10⁻³ from the eigenvector: still a map fixed on the
+/// boundary, so nothing is crushed by pins.
+pub const FREE_MAP_SOLVES: usize = 40;
+/// See [`FREE_MAP_SOLVES`].
+pub const FREE_MAP_TOLERANCE: f64 = 1e-9;
+
+/// The free map of `chart` without pins: the conformal energy's smallest eigenvector against
+/// the boundary mass (spectral conformal parameterization, [`super::boundary_eigen::BoundaryIteration`],
+/// a few Lanczos steps), moved by a similarity so that the automatic pins `auto` land on their
+/// UVs. `None` when the chart has no boundary, the iteration fails, or the two pins land on
+/// one point (the caller pins them instead).
+fn free_map(chart: &Chart, angles: &[[f64; 3]], auto: [(u32, [f64; 2]); 2]) -> Option<Vec<[f64; 2]>> {
+    let energy = conformal_hermitian(&chart.triangles, angles);
+    let mut it = super::boundary_eigen::BoundaryIteration::new(chart, energy).ok()?;
+    it.lanczos(FREE_MAP_SOLVES, FREE_MAP_TOLERANCE).ok()?;
+    let w = it.uv();
+    let at = |v: u32| c64::new(w[v as usize][0], w[v as usize][1]);
+    let (za, zb) = (at(auto[0].0), at(auto[1].0));
+    let (ta, tb) = (c64::new(auto[0].1[0], auto[0].1[1]), c64::new(auto[1].1[0], auto[1].1[1]));
+    let dz = zb - za;
+    if dz.norm().is_nan() || dz.norm() == 0.0 {
+        return None;
+    }
+    let a = (tb - ta) / dz;
+    let uv: Vec<[f64; 2]> = w.iter().map(|p| {
+        let z = a * (c64::new(p[0], p[1]) - za) + ta;
+        [z.re, z.im]
+    }).collect();
+    uv.iter().all(|p| p[0].is_finite() && p[1].is_finite()).then_some(uv)
 }
 
 /// LSCM with the chart's 3D angles.
@@ -199,13 +275,13 @@ pub fn solve_with_angles(
 /// report's note says so.
 pub fn solve(chart: &Chart, pins: &[(u32, [f64; 2])]) -> Result<ChartSolution, ChartFailure> {
     let angles = chart_angles(&chart.positions, &chart.triangles);
-    let (uv, note) = solve_with_angles(chart, &angles, pins)?;
+    let (uv, note) = solve_free(chart, &angles, pins)?;
     if chart.boundary_loops.len() > 1 {
         let open = folds(chart, &uv);
         if filling_may_help(chart, &uv, open) {
             let filled = super::fixed_boundary::filled_chart(chart);
             let filled_angles = chart_angles(&filled.positions, &filled.triangles);
-            if let Ok((mut closed_uv, closed_note)) = solve_with_angles(&filled, &filled_angles, pins) {
+            if let Ok((mut closed_uv, closed_note)) = solve_free(&filled, &filled_angles, pins) {
                 closed_uv.truncate(chart.positions.len());
                 if folds(chart, &closed_uv) < open {
                     let mut s = ChartSolution::direct(closed_uv);
@@ -220,12 +296,12 @@ pub fn solve(chart: &Chart, pins: &[(u32, [f64; 2])]) -> Result<ChartSolution, C
     Ok(s)
 }
 
-/// How much a map of `chart` folds: its flipped or degenerate triangles, and whether a
-/// boundary loop crosses itself or another (a closed seam does not count,
-/// [`crate::metrics::closed_seams`], as in the chart's report). Ordered: fewer flips first,
-/// then no overlap.
+/// How much a map of `chart` folds: its flipped or degenerate triangles (a quad folded on
+/// either of its splits counts, as in the chart's report), and whether a boundary loop
+/// crosses itself or another (a closed seam does not count, [`crate::metrics::closed_seams`],
+/// as in the chart's report). Ordered: fewer flips first, then no overlap.
 pub(crate) fn folds(chart: &Chart, uv: &[[f64; 2]]) -> (usize, bool) {
-    let flipped = crate::metrics::count_flips(&chart.triangles, uv);
+    let flipped = crate::metrics::count_flips_with_quads(&chart.triangles, &chart.quads, uv);
     let loops = &chart.boundary_loops;
     let overlap = crate::metrics::closed_seams::outline_overlap(&chart.positions, &chart.triangles, uv, loops);
     (flipped, overlap)

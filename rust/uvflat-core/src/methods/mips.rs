@@ -155,7 +155,8 @@ fn solve_newton(
     // included) it starts Newton next to the MIPS minimiser; otherwise the mean value map,
     // flip-free with convex quads by Floater's theorem on the polygon graph (with pins only
     // when they are consistent enough).
-    let lscm_start = super::lscm::solve_with_angles(chart, &super::chart_angles(&chart.positions, &chart.triangles), start_pins)
+    let angles = super::chart_angles(&chart.positions, &chart.triangles);
+    let lscm_start = super::lscm::solve_free(chart, &angles, start_pins)
         .ok()
         .map(|(uv, _)| uv)
         .filter(|uv| valid(uv));

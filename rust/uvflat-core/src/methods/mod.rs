@@ -5,6 +5,7 @@
 
 pub mod abf;
 pub mod arap;
+pub mod boundary_eigen;
 pub mod fixed_boundary;
 pub mod harmonic;
 pub mod lscm;
@@ -42,10 +43,10 @@ pub enum BoundaryShape {
 /// Options of the spectral conformal method.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SpectralOptions {
-    /// Most inverse-iteration steps. Default 200.
+    /// Most solves of the eigenvector search (Lanczos, `methods/boundary_eigen.rs`). Default 200.
     pub max_iterations: usize,
-    /// Stop when the B-norm change of the B-normalised iterate between two inverse-iteration
-    /// steps is below this. Default 1e-10.
+    /// Stop when the eigenvector's residual `‖M w − θ w‖_B / θ` (`M = (Q + εB)⁻¹ B`) is at
+    /// most this. Default 1e-10.
     pub tolerance: f64,
 }
 

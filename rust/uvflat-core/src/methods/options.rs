@@ -61,12 +61,17 @@ const FIXED: &[OptionSpec] = &[OptionSpec {
 }];
 
 const SPECTRAL: &[OptionSpec] = &[
-    OptionSpec { name: "max_iterations", kind: ITERATIONS, default: OptionDefault::Int(200), doc: "most inverse iterations" },
+    OptionSpec {
+        name: "max_iterations",
+        kind: ITERATIONS,
+        default: OptionDefault::Int(200),
+        doc: "most solves of the eigenvector search",
+    },
     OptionSpec {
         name: "tolerance",
         kind: POSITIVE,
         default: OptionDefault::Float(1e-10),
-        doc: "stop when the normalised iterate changes by less than this",
+        doc: "stop when the eigenvector's residual, relative to its eigenvalue, is below this",
     },
 ];
 

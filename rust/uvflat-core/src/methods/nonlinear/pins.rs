@@ -71,7 +71,7 @@ pub fn pins_scale(chart: &Chart, pins: &[(u32, [f64; 2])]) -> Option<f64> {
         return None;
     }
     let angles = crate::methods::chart_angles(&chart.positions, &chart.triangles);
-    let (z, _) = crate::methods::lscm::solve_with_angles(chart, &angles, &[]).ok()?;
+    let (z, _) = crate::methods::lscm::solve_free(chart, &angles, &[]).ok()?;
     let a = similarity_scale(&z, pins)?;
     let (mut uv_area, mut area) = (0.0, 0.0);
     for t in &chart.triangles {
