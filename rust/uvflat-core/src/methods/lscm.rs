@@ -230,10 +230,11 @@ fn solve_pinned_or_free(
 }
 
 /// Most solves of [`free_map`]'s Lanczos run, and the relative residual at which it stops.
-/// Tight, because a developable chart's map must come out exact (its eigenvector stands out
-/// by a factor of about 10⁸, so two or three solves reach it); on curved charts the pieces of
-/// the bunny subdivided twice converge in 5–10 solves and those of the camel's head
-/// subdivided twice in 5–17. A chart of 292k vertices (the whole fertility statue subdivided
+/// Tight, because a developable chart's map must come out exact (`tests/methods.rs`, the
+/// planar disk and the cut cylinder): its eigenvalue is the shift alone, far below the
+/// others (stopped at 10⁻³, the cylinder's map was off by 10⁻⁶), so two or three solves reach
+/// it. On curved charts the pieces of the bunny subdivided twice converge in 5–10 solves and
+/// those of the camel's head subdivided twice in 5–17. A chart of 292k vertices (the whole fertility statue subdivided
 /// three times) stops at the cap, 6·10⁻³ from the eigenvector: still a map fixed on the
 /// boundary, so nothing is crushed by pins.
 pub const FREE_MAP_SOLVES: usize = 40;
