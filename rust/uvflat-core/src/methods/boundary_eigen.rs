@@ -159,17 +159,8 @@ impl BoundaryIteration {
     /// Project `self.w` B-orthogonally off the constants and B-normalise it; returns its
     /// B-norm before the scaling (0 or not finite when it collapsed).
     fn normalise(&mut self) -> f64 {
-        let b = &self.b;
-        let (mut s, mut m) = (c64::new(0.0, 0.0), 0.0);
-        for (w, &bi) in self.w.iter().zip(b) {
-            s += *w * bi;
-            m += bi;
-        }
-        let mean = s * (1.0 / m);
-        for w in &mut self.w {
-            *w -= mean;
-        }
-        let nb = self.w.iter().zip(b).map(|(w, &bi)| bi * (w.re * w.re + w.im * w.im)).sum::<f64>().sqrt();
+        self.normalise_mean();
+        let nb = self.inner(&self.w, &self.w).re.sqrt();
         if nb > 0.0 && nb.is_finite() {
             for w in &mut self.w {
                 *w *= 1.0 / nb;
@@ -196,15 +187,9 @@ impl BoundaryIteration {
             }
             // The residual of the new iterate after its B-projection c·old (c = Σ b conj(old) new)
             // vanishes exactly when the two differ by a complex scalar.
-            let mut c = c64::new(0.0, 0.0);
-            for ((o, w), &bi) in old.iter().zip(&self.w).zip(&self.b) {
-                c += o.conj() * *w * bi;
-            }
-            let d2: f64 = old.iter().zip(&self.w).zip(&self.b).map(|((o, w), &bi)| {
-                let r = *w - c * *o;
-                bi * (r.re * r.re + r.im * r.im)
-            }).sum();
-            change = d2.sqrt();
+            let c = self.inner(&old, &self.w);
+            let residual: Vec<c64> = self.w.iter().zip(&old).map(|(w, o)| *w - c * *o).collect();
+            change = self.inner(&residual, &residual).re.max(0.0).sqrt();
             if change <= tolerance {
                 break;
             }
