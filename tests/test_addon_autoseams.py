@@ -468,3 +468,67 @@ def test_flat_glyphs_are_one_island_each_through_the_operator(ext, scene):
     after = read(ext, obj)
     assert summary.seams_added == len(after.seams) > 0  # the letters' holes joined
     _assert_no_flip_on_blender_triangles(obj, after)
+
+
+def _sphere_with_holes(name="Holey"):
+    """A UV sphere (48 × 24) with five small holes: the faces around five points deleted, as a
+    scan loses surface (the vertices stay)."""
+    bpy.ops.mesh.primitive_uv_sphere_add(segments=48, ring_count=24)
+    obj = bpy.context.active_object
+    obj.name = name
+    me = obj.data
+    centres = np.array([[0.9, 0.3, 0.2], [-0.5, 0.7, -0.4], [0.1, -0.8, 0.5], [-0.6, -0.5, -0.6],
+                        [0.3, 0.4, 0.85]])
+    centres /= np.linalg.norm(centres, axis=1)[:, None]
+    common.edit_mode([obj], select_all=False)
+    try:
+        import bmesh
+
+        bm = bmesh.from_edit_mesh(me)
+        doomed = [f for f in bm.faces
+                  if min(np.linalg.norm(np.asarray(f.calc_center_median()) - c) for c in centres) < 0.16]
+        bmesh.ops.delete(bm, geom=doomed, context="FACES_ONLY")
+        bmesh.update_edit_mesh(me)
+    finally:
+        common.object_mode()
+    common.mesh_io().write_seams(me, np.zeros(len(me.edges), dtype=bool))
+    return obj
+
+
+@pytest.mark.parametrize("method", ["abf", "slim"])
+def test_small_holes_are_joined_by_closed_seams_through_the_operator(ext, scene, method):
+    """A closed surface with small holes is unwrapped as the surface without them: its holes are
+    filled for the unwrap (the operator passes Blender's render triangles) and joined to the
+    outline by seams whose two sides share their UVs; every island keeps the rule. Of the five
+    holes, the longest is the outline (the sphere with holes is a disk with four holes)."""
+    obj = _sphere_with_holes()
+    result, summary = unwrap(ext, [obj], method=method, max_stretch=2.0)
+    assert result == {"FINISHED"} and not summary.failed, summary.line()
+    res = summary.results[obj.name]
+    assert res.phases["holes_filled"] == 4 and res.phases["fill_undone"] == 0, res.phases
+    after = read(ext, obj)
+    m, outside = _islands_density_outside(after, 2.0)
+    assert m.flips == 0 and m.overlapping_charts == 0 and max(outside) <= 0.05 + 1e-9, m
+    # Every island is a disk: the marked seams split the faces into exactly the islands in UV.
+    marked = {tuple(sorted(map(int, s))) for s in after.seams}
+    assert marked == {tuple(map(int, s)) for s in res.new_seams}
+    # The closed seams (both sides at the same UVs) join the holes: at least one edge each.
+    fs, cv, uv = after.face_sizes, after.corner_verts, after.uv
+    starts = np.concatenate([[0], np.cumsum(fs)[:-1]])
+    chart = np.asarray(res.chart)
+    sides = {}
+    for f, (s, n) in enumerate(zip(starts, fs)):
+        for i in range(n):
+            a, b = int(cv[s + i]), int(cv[s + (i + 1) % n])
+            sides.setdefault((min(a, b), max(a, b)), []).append((f, {a: s + i, b: s + (i + 1) % n}))
+    closed = {tuple(map(int, e)) for e in np.asarray(res.closed_seams)}
+    assert len(closed) >= 4 and closed <= marked, (len(closed), closed - marked)
+    for e in closed:
+        faces = sides[e]
+        assert len(faces) == 2 and chart[faces[0][0]] == chart[faces[1][0]], e
+        assert all(np.array_equal(uv[faces[0][1][v]], uv[faces[1][1][v]]) for v in e), e
+    # Every other seam inside an island has its sides apart in UV.
+    for e in marked - closed:
+        faces = sides.get(e, [])
+        if len(faces) == 2 and chart[faces[0][0]] == chart[faces[1][0]]:
+            assert not all(np.array_equal(uv[faces[0][1][v]], uv[faces[1][1][v]]) for v in e), e

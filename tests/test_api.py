@@ -1596,7 +1596,7 @@ def test_phases_account_for_the_pipeline():
     assert set(p) == {"build_charts", "plan_cuts", "solve", "repair_solve", "measure",
                       "predicted_rounds", "repair_rounds", "repair_pieces", "splits", "predicted_splits",
                       "far_splits", "crease_cuts", "parts", "peels", "last_resort", "glue",
-                      "glued"} | parts
+                      "glued", "holes_filled", "fill_undone"} | parts
     assert all(v >= 0 for v in p.values())
     # The parts of plan_cuts add up to it; a cube planned on the prediction has cutting state,
     # placed cones and cut graphs.

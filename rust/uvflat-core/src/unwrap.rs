@@ -1,4 +1,5 @@
-//! The one-call pipeline: validate, split into charts, map each chart in parallel, measure.
+//! The one-call pipeline: validate, fill small holes, split into charts, map each chart in
+//! parallel, measure.
 
 use std::collections::HashMap;
 
@@ -85,6 +86,10 @@ pub struct Unwrapped {
     pub charts: Vec<ChartReport>,
     /// Seams added by automatic seams, as mesh vertex pairs `[a, b]` with `a < b`, sorted.
     pub new_seams: Vec<[u32; 2]>,
+    /// Of `new_seams`, those whose two sides keep the same UVs (closed seams): the paths that
+    /// join filled holes to their islands' outlines ([`crate::pipeline::fill`]), sorted. They
+    /// make each island a disk but show no texture seam.
+    pub closed_seams: Vec<[u32; 2]>,
     /// Edges of the selection used by three or more selected faces; each was treated as a
     /// seam (a mesh with many of them is shredded into many small charts).
     pub non_manifold_edges: usize,
@@ -116,6 +121,11 @@ impl Unwrapped {
 
 /// Unwrap the selected faces of a polygon mesh.
 ///
+/// With automatic seams, small holes are filled for the unwrap and joined to their islands'
+/// outlines by closed seams after it ([`crate::pipeline::fill`]); when an island then breaks
+/// the rule, the mesh is unwrapped again as it is (a progress callback then counts its charts
+/// from zero again).
+///
 /// Preconditions: none beyond the types; every input is validated.
 ///
 /// Errors: a [`crate::UvError`] naming the offending face, corner, vertex, seam or pin for malformed
@@ -124,14 +134,48 @@ impl Unwrapped {
 pub fn unwrap(input: &MeshInput<'_>, options: &UnwrapOptions) -> Result<Unwrapped> {
     let started = std::time::Instant::now();
     let mesh = crate::validate::validate_input(input, Some(&options.fit), Some(&options.method))?;
-    let n_corners = mesh.n_corners();
     options.auto_seams.validate(input.positions.len())?;
     // Charts run in parallel; inside one chart the sparse factorizations of the sizes met in
     // practice are faster sequential than split across threads.
     faer::set_global_parallelism(faer::Par::Seq);
 
     let render = if input.triangles.is_empty() { None } else { Some(FaceTriangulation::new(&mesh, input.triangles)?) };
-    let (charts, cut_edges) = build_charts_counting(&mesh, input.seams, input.selected, render.as_ref());
+    // Small holes are filled for the unwrap and joined to the outlines by closed seams after it
+    // (`pipeline::fill`); when that leaves an island beyond the rule, the mesh is unwrapped as
+    // it is.
+    if let Some(filled) = pipeline::fill::Filled::plan(&mesh, input, options, render.as_ref()) {
+        let filled_input = filled.input(input);
+        let filled_options = filled.options(options);
+        let fit = Some(&filled_options.fit);
+        let filled_mesh = crate::validate::validate_input(&filled_input, fit, Some(&options.method))?;
+        let filled_render = match render {
+            Some(_) => Some(FaceTriangulation::new(&filled_mesh, filled_input.triangles)?),
+            None => None,
+        };
+        let r = unwrap_mesh(&filled_mesh, filled_render.as_ref(), &filled_input, &filled_options, started)?;
+        if let Some(mut r) = filled.restore(&mesh, render.as_ref(), input, options, r) {
+            r.phases.holes_filled = filled.holes;
+            return Ok(r);
+        }
+        let undone = started.elapsed().as_secs_f64();
+        let mut r = unwrap_mesh(&mesh, render.as_ref(), input, options, std::time::Instant::now())?;
+        r.phases.fill_undone = undone;
+        return Ok(r);
+    }
+    unwrap_mesh(&mesh, render.as_ref(), input, options, started)
+}
+
+/// [`unwrap`] of `input`, validated as `mesh` (`render`: its render triangulation), timed from
+/// `started`.
+fn unwrap_mesh(
+    mesh: &crate::mesh::PolyMesh<'_>,
+    render: Option<&FaceTriangulation>,
+    input: &MeshInput<'_>,
+    options: &UnwrapOptions,
+    started: std::time::Instant,
+) -> Result<Unwrapped> {
+    let n_corners = mesh.n_corners();
+    let (charts, cut_edges) = build_charts_counting(mesh, input.seams, input.selected, render);
     // Pinned corners only (a later pin of the same corner wins): nothing per corner when
     // there are no pins.
     let pin_of_corner: HashMap<u32, [f64; 2]> = input.pins.iter().copied().collect();
@@ -140,7 +184,7 @@ pub fn unwrap(input: &MeshInput<'_>, options: &UnwrapOptions) -> Result<Unwrappe
     for &v in &options.auto_seams.avoid_vertices {
         avoid[v as usize] = true;
     }
-    let ctx = Context::new(&mesh, render.as_ref(), &pin_of_corner, options, &avoid);
+    let ctx = Context::new(mesh, render, &pin_of_corner, options, &avoid);
     ctx.clock.add(|p| p.build_charts = started.elapsed().as_secs_f64());
     // With a Progress: charts after a cancel are skipped (None), and the unwrap is an error.
     let total = charts.len();
@@ -217,7 +261,8 @@ pub fn unwrap(input: &MeshInput<'_>, options: &UnwrapOptions) -> Result<Unwrappe
     }
     new_seams.sort_unstable();
     new_seams.dedup();
-    Ok(Unwrapped { uv, face_chart, charts: reports, new_seams, non_manifold_edges: cut_edges.non_manifold,
+    Ok(Unwrapped { uv, face_chart, charts: reports, new_seams, closed_seams: Vec::new(),
+        non_manifold_edges: cut_edges.non_manifold,
         inconsistent_edges: cut_edges.inconsistent, face_distortion, face_flips, phases: ctx.clock.get() })
 }
 

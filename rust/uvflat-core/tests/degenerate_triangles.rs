@@ -83,6 +83,9 @@ fn a_scan_with_collapsed_vertices_keeps_the_rule() {
 /// of 38,656 faces whose outline crosses itself where the surface folds, and the last
 /// resort's `scaffold` stalls on it. The repair's last step peels it at any size
 /// (`pipeline/peel.rs`): the faces where the outline crosses become islands of their own.
+/// (Every 79th: with three of its small holes filled for the unwrap, `pipeline/fill.rs`, the
+/// last resort maps the beetle whole within the rule, one island by another method, and no
+/// peel is needed.)
 #[test]
 fn a_folded_island_is_peeled_at_any_size() {
     let Some(dir) = shared_meshes() else {
@@ -94,7 +97,7 @@ fn a_folded_island_is_peeled_at_any_size() {
         let options = UnwrapOptions { method: Method::Abf(Default::default()), ..Default::default() };
         let r = unwrap(&s.input(), &options).unwrap();
         assert!(s.face_sizes.len() < uvflat_core::pipeline::peel::PEEL_FROM);
-        assert!(r.phases.peels >= 1, "step {step}: {:?}", r.phases);
+        assert!(step != 89 || r.phases.peels >= 1, "step {step}: {:?}", r.phases);
         assert_islands_keep_the_rule(&s, &format!("beetle, step {step}"), &r);
         // The peel keeps the piece's map: one island keeps almost every face.
         let largest = r.charts.iter().map(|c| c.faces).max().unwrap_or(0);

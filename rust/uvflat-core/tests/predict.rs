@@ -273,3 +273,29 @@ fn a_plan_far_above_the_split_limit_gets_no_one_cone_rounds_when_a_split_follows
     // the one-cone rounds lowered.
     assert!(whole.mean_area <= split.mean_area + 1e-12);
 }
+
+#[test]
+fn a_large_nearly_closed_disk_is_cut_before_any_solve_under_a_method_that_balances_area() {
+    use uvflat_core::pipeline::triage::{PREDICTED_BREAK, PREDICTED_FAR, PREDICT_FROM};
+    let slim = || UnwrapOptions { method: Method::Slim(slim::SlimOptions::default()), ..Default::default() };
+    // A sphere with a small hole at its south pole: no flattening of it keeps the rule, and its
+    // solve as it is would be thrown away.
+    let nearly_closed = sphere(200, 200, |c| c[2] > -0.995);
+    let triangles: usize = nearly_closed.face_sizes.iter().map(|&k| k as usize - 2).sum();
+    assert!(triangles >= PREDICT_FROM, "{triangles} triangles: the disk is not large");
+    assert!(predicted(&nearly_closed, 2.0) > PREDICTED_FAR);
+    let r = unwrap(&nearly_closed.input(), &slim()).unwrap();
+    assert_eq!(r.phases.solve, 0.0, "SLIM solved the nearly closed sphere as it is first: {:?}", r.phases);
+    assert!(!r.new_seams.is_empty());
+    common::assert_islands_keep_the_rule(&nearly_closed, "slim", &r);
+    // Three quarters of the sphere: predicted beyond the bound for parts, not beyond the far
+    // one. SLIM keeps the rule on it as it is, one island without a cut.
+    let three_quarters = sphere(200, 200, |c| c[2] > -0.5);
+    let p = predicted(&three_quarters, 2.0);
+    assert!(p > PREDICTED_BREAK && p < PREDICTED_FAR, "predicted {p:.3}");
+    let r = unwrap(&three_quarters.input(), &slim()).unwrap();
+    assert!(r.phases.solve > 0.0, "SLIM did not solve three quarters of the sphere as they are first");
+    let (islands, seams) = (r.charts.len(), r.new_seams.len());
+    assert!(seams == 0 && islands == 1, "{islands} islands, {seams} new seams");
+    common::assert_islands_keep_the_rule(&three_quarters, "slim", &r);
+}

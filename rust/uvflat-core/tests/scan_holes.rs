@@ -1,9 +1,9 @@
-//! A scan with many small holes: every hole is joined to the outline, and on rough surface the
-//! two sides of such a cut cross where the surface is saddle-shaped, at dozens of places over
-//! the chart. The map of the chart is kept where it is sound: the faces around the crossings
-//! are peeled into islands of their own (`pipeline/peel.rs`), each taking the pipeline's road
-//! (its holes joined, then the last resort), instead of the chart being split level after
-//! level and mapped by another method in the end. The outcome does not depend on threads.
+//! A scan with many small holes: the holes are filled for the unwrap and joined to the
+//! outline by closed seams after it (`pipeline/fill.rs`), so the scan is unwrapped as the
+//! closed surface it scanned. Cut open instead, every hole joined to the outline by a cut whose
+//! two sides are free, the outline ran through all of them, crossed itself at dozens of places,
+//! and the peel (`pipeline/peel.rs`) left 17–31 islands, most of them specks around the holes.
+//! The outcome does not depend on threads.
 
 mod common;
 
@@ -19,57 +19,44 @@ fn scan(seed: u64) -> Option<Soup> {
     Some(with_holes(&subdivide(&subdivide(&load(&dir.join("bunny.off")))), 100, 30, seed))
 }
 
-/// Every island keeps the rule, the seams reported are those of the islands, and the bulk of
-/// the scan is one island mapped by `method` itself, without a split.
-fn check(s: &Soup, method: &str, r: &Unwrapped) {
+/// Every island keeps the rule, the seams reported are those of the islands, the holes were
+/// filled and joined, and the scan is a few islands mapped by `method` itself, without the
+/// last resort: at most `islands` of more than one face (a face that only holes bordered is
+/// an island of its own, as it is a part of the mesh of its own).
+fn check(s: &Soup, method: &str, r: &Unwrapped, islands: usize) {
     assert_islands_keep_the_rule(s, method, r);
-    // The bulk of the scan is mapped by the method asked for, in one island...
+    assert!(r.phases.holes_filled >= 90, "{method}: {:?}", r.phases);
+    assert_eq!(r.phases.fill_undone, 0.0, "{method}: {:?}", r.phases);
+    assert_eq!(r.phases.last_resort, 0, "{method}: {:?}", r.phases);
     let faces = s.face_sizes.len();
     let main = r.charts.iter().max_by_key(|c| c.faces).unwrap();
     assert_eq!(main.status, ChartStatus::Solved, "{method}: the main island: {:?}", main.reason);
     assert_eq!(main.method, method);
-    assert!(main.faces as f64 >= 0.85 * faces as f64, "{method}: the main island has {} of {faces} faces", main.faces);
-    // ... by a bounded number of whole solves: no split of the chart was needed.
-    assert_eq!(r.phases.splits, 0, "{method}: {:?}", r.phases);
-    assert!(r.phases.peels >= 1, "{method}: {:?}", r.phases);
-    // The peeled faces stay in a few dozen islands, at most one of them by another method.
-    assert!(r.charts.len() <= 50, "{method}: {} islands", r.charts.len());
-    let fallbacks = r.charts.iter().filter(|c| c.status == ChartStatus::Fallback).count();
-    assert!(fallbacks <= 1, "{method}: {fallbacks} islands by another method");
+    assert!(main.faces as f64 >= 0.5 * faces as f64, "{method}: the main island has {} of {faces} faces", main.faces);
+    let large = r.charts.iter().filter(|c| c.faces > 1).count();
+    assert!(large <= islands, "{method}: {large} islands of more than one face");
+    assert!(r.charts.iter().all(|c| c.status == ChartStatus::Solved), "{method}: an island by another method");
 }
 
 #[test]
-fn abf_keeps_its_map_of_a_scan_with_a_hundred_holes_where_it_is_sound() {
+fn abf_unwraps_a_scan_with_a_hundred_holes_as_the_closed_surface_it_scanned() {
     let Some(s) = scan(4) else { return };
     let options = UnwrapOptions { method: Method::Abf(Default::default()), ..Default::default() };
     let r = unwrap(&s.input(), &options).unwrap();
-    check(&s, "abf", &r);
+    // The closed bunny subdivided twice is 3 islands under `abf`; with its holes cut open, a
+    // few dozen.
+    check(&s, "abf", &r, 5);
     // The same on one thread, to the bit.
     assert_same_on_one_thread(&s, &options, &r);
 }
 
-/// On seed 4 the overlapping sides of `slim`'s map take 21% of the chart: the patch is peeled
-/// (at most a quarter of the chart) rather than the chart split eight times and mapped by
-/// `scaffold` in sixths.
 #[test]
-fn slim_peels_a_large_overlap_instead_of_splitting() {
-    let Some(s) = scan(4) else { return };
-    let options = UnwrapOptions { method: Method::Slim(Default::default()), ..Default::default() };
-    let r = unwrap(&s.input(), &options).unwrap();
-    assert_islands_keep_the_rule(&s, "slim", &r);
-    assert_eq!(r.phases.splits, 0, "{:?}", r.phases);
-    assert!(r.phases.peels >= 1, "{:?}", r.phases);
-    let faces = s.face_sizes.len();
-    let main = r.charts.iter().max_by_key(|c| c.faces).unwrap();
-    assert_eq!(main.method, "slim");
-    assert!(main.faces as f64 >= 0.5 * faces as f64, "the main island has {} of {faces} faces", main.faces);
-    let fallbacks = r.charts.iter().filter(|c| c.status == ChartStatus::Fallback).count();
-    assert!(fallbacks <= 1 && r.charts.len() <= 50, "{fallbacks} fallbacks, {} islands", r.charts.len());
-}
-
-#[test]
-fn slim_keeps_its_map_of_a_scan_with_a_hundred_holes_where_it_is_sound() {
-    let Some(s) = scan(3) else { return };
-    let options = UnwrapOptions { method: Method::Slim(Default::default()), ..Default::default() };
-    check(&s, "slim", &unwrap(&s.input(), &options).unwrap());
+fn slim_unwraps_a_scan_with_a_hundred_holes_as_the_closed_surface_it_scanned() {
+    for seed in [3, 4] {
+        let Some(s) = scan(seed) else { return };
+        let options = UnwrapOptions { method: Method::Slim(Default::default()), ..Default::default() };
+        // The closed bunny subdivided twice is 1 island under `slim`; with its holes cut open, a
+        // few dozen.
+        check(&s, "slim", &unwrap(&s.input(), &options).unwrap(), 4);
+    }
 }

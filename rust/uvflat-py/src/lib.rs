@@ -434,6 +434,9 @@ fn unwrap(
     let n_faces = result.face_chart.len();
     let n_new = result.new_seams.len();
     let new_seams = PyArray1::from_vec(py, result.new_seams.iter().flatten().copied().collect::<Vec<u32>>()).reshape([n_new, 2])?;
+    let n_closed = result.closed_seams.len();
+    let closed_seams =
+        PyArray1::from_vec(py, result.closed_seams.iter().flatten().copied().collect::<Vec<u32>>()).reshape([n_closed, 2])?;
     let face_solved: Vec<bool> = (0..n_faces).map(|f| result.face_solved(f)).collect();
     // The core's UVs become the array's buffer without a copy (`[f64; 2]` rows flatten in place).
     let n_uv = result.uv.len();
@@ -451,6 +454,7 @@ fn unwrap(
         seconds,
         method: method_name,
         new_seams: new_seams.unbind(),
+        closed_seams: closed_seams.unbind(),
         non_manifold_edges: result.non_manifold_edges,
         inconsistent_edges: result.inconsistent_edges,
         face_conformal: PyArray1::from_iter(py, result.face_distortion.iter().map(|d| d[0])).unbind(),

@@ -171,6 +171,7 @@ pub struct PyUnwrapResult {
     pub seconds: f64,
     pub method: String,
     pub new_seams: Py<PyArray2<u32>>,
+    pub closed_seams: Py<PyArray2<u32>>,
     pub non_manifold_edges: usize,
     pub inconsistent_edges: usize,
     pub face_conformal: Py<PyArray1<f64>>,
@@ -206,7 +207,10 @@ impl PyUnwrapResult {
     /// valid by making the faces there islands of their own), ``last_resort`` (solves of the last
     /// resort, the method's flip-free kin then ``scaffold``, for pieces whose repair still broke
     /// the atlas rule), ``glued`` (small islands whose faces were laid on the islands around
-    /// them) and ``glue`` (its seconds, summed over threads).
+    /// them), ``glue`` (its seconds, summed over threads), ``holes_filled`` (small holes
+    /// filled for the unwrap and joined to the outlines by closed seams after it) and
+    /// ``fill_undone`` (seconds of an unwrap with holes filled that was undone, an island
+    /// breaking the rule without its fills).
     #[getter]
     fn phases<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let p = &self.phases;
@@ -232,6 +236,8 @@ impl PyUnwrapResult {
         d.set_item("last_resort", p.last_resort)?;
         d.set_item("glue", p.glue)?;
         d.set_item("glued", p.glued)?;
+        d.set_item("holes_filled", p.holes_filled)?;
+        d.set_item("fill_undone", p.fill_undone)?;
         Ok(d)
     }
 
@@ -275,6 +281,14 @@ impl PyUnwrapResult {
     #[getter]
     fn new_seams<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<u32>> {
         self.new_seams.bind(py).clone()
+    }
+
+    /// Of ``new_seams``, those whose two sides keep the same UVs, shape (J, 2), uint32, sorted:
+    /// the paths that join small holes (filled for the unwrap) to their islands' outlines. They
+    /// make each island a disk but show no texture seam.
+    #[getter]
+    fn closed_seams<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<u32>> {
+        self.closed_seams.bind(py).clone()
     }
 
     /// Edges of the selection used by three or more selected faces; each was treated as a
@@ -330,6 +344,7 @@ impl PyUnwrapResult {
         d.set_item("charts", PyList::new(py, reports)?)?;
         d.set_item("seconds", self.seconds)?;
         d.set_item("new_seams", self.new_seams.bind(py))?;
+        d.set_item("closed_seams", self.closed_seams.bind(py))?;
         d.set_item("non_manifold_edges", self.non_manifold_edges)?;
         d.set_item("inconsistent_edges", self.inconsistent_edges)?;
         Ok(d)

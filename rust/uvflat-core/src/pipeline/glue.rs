@@ -45,8 +45,7 @@
 
 use std::collections::{HashMap, HashSet};
 
-use super::outcome::{ChartStatus, Problem};
-use super::solve::measure;
+use super::solve::remeasure;
 use super::{outline_pairs, Context, Piece};
 use crate::charts::{build_charts_with, Chart, ChartKind};
 use crate::geometry::{cross, cross2, dot, newell_normal, norm, sub};
@@ -633,19 +632,7 @@ impl<'p, 'c, 'a, 'm> Pass<'p, 'c, 'a, 'm> {
             at += m;
         }
         let uv: Vec<[f64; 2]> = vid_of.iter().map(|&w| island.uv[w as usize]).collect();
-        let piece = &self.pieces[k];
-        let mut report = piece.report.clone();
-        let fresh = super::outcome::ChartReport::new(&chart, piece.report.method);
-        report.faces = fresh.faces;
-        report.triangles = fresh.triangles;
-        report.vertices = fresh.vertices;
-        report.boundary_loops = fresh.boundary_loops;
-        report.genus = fresh.genus;
-        report.kind = fresh.kind;
-        let fell_back = piece.report.status == ChartStatus::Fallback;
-        report.status = if fell_back { ChartStatus::Fallback } else { ChartStatus::Solved };
-        report.problem = fell_back.then_some(Problem::FellBack);
-        let face_flips = measure(&chart, &uv, &mut report, &ctx.rule)?;
+        let (report, face_flips) = remeasure(&chart, &uv, &self.pieces[k].report, &ctx.rule)?;
         if ctx.rule.broken(&report).is_some() {
             return None;
         }
@@ -828,7 +815,8 @@ mod tests {
     use super::*;
     use crate::charts::build_charts;
     use crate::mesh::PolyMesh;
-    use crate::pipeline::outcome::ChartReport;
+    use crate::pipeline::outcome::{ChartReport, ChartStatus};
+    use crate::pipeline::solve::measure;
     use crate::pipeline::rule::AtlasRule;
     use crate::pipeline::test_mesh::grid;
     use crate::unwrap::UnwrapOptions;

@@ -11,9 +11,11 @@
 //!    rule; pinned disks and charts with a defect are never cut. With automatic seams off
 //!    every chart is solved as it is.
 //!    A disk is cut first when its predicted flattening ([`crate::cuts::predicted_outside`])
-//!    breaks Max Stretch ([`triage::PREDICTED_BREAK_PLANNED`]; under a method that balances
-//!    area, with [`crate::cuts::AutoSeamOptions::same_seams`] off, only a disk it would cut
-//!    into parts, and only by far: [`triage::PREDICTED_BREAK`]).
+//!    breaks Max Stretch ([`triage::predicted_limit`]: [`triage::PREDICTED_BREAK_PLANNED`];
+//!    under a method that balances area, with [`crate::cuts::AutoSeamOptions::same_seams`]
+//!    off, only a disk of [`triage::PREDICT_FROM`] triangles or more, and only by far:
+//!    [`triage::PREDICTED_BREAK`] for one it would cut into parts, [`triage::PREDICTED_FAR`]
+//!    for the others, nearly closed surfaces).
 //!    A hard surface (flat or rolled everywhere but along its creases, with more curved
 //!    vertices than cones) is first cut along its creases ([`creases`]), each region taking
 //!    the road on its own.
@@ -37,10 +39,14 @@
 //! 7. Glue: [`glue::apply`] lays the faces of small islands left by the steps above on the
 //!    islands around them where they fit, keeping those islands' maps.
 //!
+//! Around the whole road, at the level of the mesh: [`fill`] fills the mesh's small holes
+//! before it and joins them to the islands' outlines by closed seams after it.
+//!
 //! A new step is one file here; the outcome of every chart is a typed value
 //! ([`outcome::ChartStatus`], [`outcome::Problem`]).
 
 pub mod creases;
+pub mod fill;
 pub mod glue;
 pub mod last_resort;
 pub mod outcome;
@@ -189,19 +195,19 @@ fn road(ctx: &Context<'_, '_>, chart: &Chart, base_seams: &[[u32; 2]], depth: us
     }
     // The scale system of the prediction, kept for the cutter if the disk is cut.
     let mut solver = None;
-    if road == Triage::SolveThenRepair && (ctx.plans_on_prediction() || parts::wanted(ctx, chart)) {
+    let limit = if road == Triage::SolveThenRepair { triage::predicted_limit(ctx, chart) } else { None };
+    if let Some(limit) = limit {
         // A disk whose conformal flattening is predicted to break Max Stretch is cut before
-        // any solve (the solve as it is would be thrown away; see the two bounds). Only the
+        // any solve (the solve as it is would be thrown away; see the bounds). Only the
         // scale system is built here: the cutter's graph, costs and occlusion rays wait until
         // a cut is due.
-        // Under a method that balances area this is asked of the disks it would cut into
-        // parts ([`parts`]): their whole solve is the longest of the unwrap (an open scan, the
-        // camel's head subdivided twice under `slim`: 7.6 s of 12.9 s, thrown away).
+        // Under a method that balances area this is asked of large disks only, by far
+        // (an open scan, the camel's head subdivided twice under `slim`: 7.6 s of 12.9 s,
+        // thrown away; a closed scan with one small hole).
         let t = std::time::Instant::now();
         let s = crate::cuts::cones::ScaleSolver::new(chart);
         let predicted = s.as_ref().and_then(|s| crate::cuts::predicted_outside(chart, s, ctx.rule.max_stretch));
         ctx.clock.add(|p| p.plan(t, |p| &mut p.cut_state));
-        let limit = if ctx.plans_on_prediction() { triage::PREDICTED_BREAK_PLANNED } else { triage::PREDICTED_BREAK };
         if predicted.is_some_and(|o| o > limit) {
             let cutter = repair::cutter_with(ctx, chart, s);
             return repair::repair(ctx, chart, base_seams, depth, None, Some(cutter));

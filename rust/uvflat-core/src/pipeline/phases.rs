@@ -64,6 +64,12 @@ pub struct Phases {
     pub glued: usize,
     /// Per-face quality of the result (wall clock).
     pub measure: f64,
+    /// Small holes filled for the unwrap and joined to the outlines by closed seams after it
+    /// ([`crate::pipeline::fill`]).
+    pub holes_filled: usize,
+    /// Seconds (wall clock) of an unwrap with small holes filled that was undone, an island
+    /// it left breaking the rule without its fills: the mesh was then unwrapped as it is.
+    pub fill_undone: f64,
 }
 
 impl Phases {

@@ -96,6 +96,31 @@ pub fn measure(chart: &Chart, uv: &[[f64; 2]], report: &mut ChartReport, rule: &
     Some(face_flips)
 }
 
+/// The report of an island rebuilt as `chart` with `uv` (faces laid on it, holes joined), from
+/// `old`, the report of the island it was: the chart's own counts, the status kept (solved, or
+/// a fallback, with its reason), measured again against `rule` by [`measure`], with the
+/// flips per face. `None` when the island cannot be measured.
+pub fn remeasure(
+    chart: &Chart,
+    uv: &[[f64; 2]],
+    old: &ChartReport,
+    rule: &AtlasRule,
+) -> Option<(ChartReport, Vec<u32>)> {
+    let mut report = old.clone();
+    let fresh = ChartReport::new(chart, old.method);
+    report.faces = fresh.faces;
+    report.triangles = fresh.triangles;
+    report.vertices = fresh.vertices;
+    report.boundary_loops = fresh.boundary_loops;
+    report.genus = fresh.genus;
+    report.kind = fresh.kind;
+    let fell_back = old.status == ChartStatus::Fallback;
+    report.status = if fell_back { ChartStatus::Fallback } else { ChartStatus::Solved };
+    report.problem = fell_back.then_some(Problem::FellBack);
+    let face_flips = measure(chart, uv, &mut report, rule)?;
+    Some((report, face_flips))
+}
+
 /// What [`hold_to`] appends to the reason of a report whose outline crosses itself.
 pub const OVERLAP_NOTE: &str = "the island's outline crosses itself";
 

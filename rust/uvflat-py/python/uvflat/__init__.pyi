@@ -187,6 +187,11 @@ class UnwrapResult:
     def new_seams(self) -> npt.NDArray[np.uint32]:
         """Seams added by automatic seams, shape (K, 2), vertex pairs (a < b), sorted."""
     @property
+    def closed_seams(self) -> npt.NDArray[np.uint32]:
+        """Of ``new_seams``, those whose two sides keep the same UVs, shape (J, 2), sorted: the
+        paths that join small holes (filled for the unwrap) to their islands' outlines. They
+        make each island a disk but show no texture seam."""
+    @property
     def non_manifold_edges(self) -> int:
         """Edges of the selection used by three or more selected faces; each was treated as a
         seam (many of them shred a mesh into many small charts)."""
@@ -223,7 +228,10 @@ class UnwrapResult:
         rule under a method that does not balance area), ``peels`` (pieces whose outline crossed itself, or that
         folded at a few faces, made valid by making the faces there islands of their own), ``last_resort`` (solves of the last resort, the method's flip-free kin then ``scaffold``,
         for pieces whose repair still broke the atlas rule), ``glued`` (small islands whose
-        faces were laid on the islands around them) and ``glue`` (its seconds)."""
+        faces were laid on the islands around them), ``glue`` (its seconds),
+        ``holes_filled`` (small holes filled for the unwrap and joined to the outlines by
+        closed seams after it) and ``fill_undone`` (seconds of an unwrap with holes filled
+        that was undone, an island breaking the rule without its fills)."""
     def as_dict(self) -> dict[str, Any]:
         """All fields as a plain dict (arrays included, chart reports as dicts)."""
 
