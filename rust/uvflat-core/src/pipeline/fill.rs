@@ -48,7 +48,7 @@ use super::outcome::ChartReport;
 use super::rule::AtlasRule;
 use super::solve::remeasure;
 use crate::charts::{build_charts_with, Chart, ChartKind, FaceTriangulation};
-use crate::geometry::{cross, norm, sub};
+use crate::geometry::{cross, dot, newell_normal, norm, sub};
 use crate::mesh::PolyMesh;
 use crate::unwrap::{Fit, MeshInput, UnwrapOptions, Unwrapped};
 
@@ -378,17 +378,10 @@ fn fill_triangles(positions: &[[f64; 3]], verts: &[u32], edge: impl Fn(u32, u32)
     let ring: Vec<u32> = verts.iter().rev().copied().collect();
     let pts: Vec<[f64; 3]> = ring.iter().map(|&v| positions[v as usize]).collect();
     let tris = crate::charts::triangulate_polygon_avoiding(&pts, |i, j| edge(ring[i], ring[j]));
-    let mut normal = [0.0; 3];
-    for i in 0..pts.len() {
-        let n = cross(pts[i], pts[(i + 1) % pts.len()]);
-        normal = [normal[0] + n[0], normal[1] + n[1], normal[2] + n[2]];
-    }
+    let normal = newell_normal(pts.len(), |i| pts[i]);
     let turn: Vec<f64> = tris
         .iter()
-        .map(|t| {
-            let n = cross(sub(pts[t[1]], pts[t[0]]), sub(pts[t[2]], pts[t[0]]));
-            0.5 * (n[0] * normal[0] + n[1] * normal[1] + n[2] * normal[2]) / norm(normal)
-        })
+        .map(|t| 0.5 * dot(cross(sub(pts[t[1]], pts[t[0]]), sub(pts[t[2]], pts[t[0]])), normal) / norm(normal))
         .collect();
     let mean = turn.iter().sum::<f64>() / turn.len() as f64;
     if !(mean.is_finite() && mean > 0.0 && turn.iter().all(|&a| a >= MIN_FILL_AREA * mean)) {
