@@ -1209,8 +1209,8 @@ def selected_face_count(context) -> int:
 # Rough seconds per selected face of one solve, per method (linear methods are one sparse
 # factorization; the iterative ones many): only to decide whether to show progress.
 _SECONDS_PER_FACE = {"tutte": 2e-6, "harmonic": 2e-6, "mean_value": 3e-6, "lscm": 3e-6,
-                     "spectral": 2e-5, "abf": 3e-5, "arap": 5e-5, "slim": 5e-5, "mips": 5e-5,
-                     "scaffold": 2e-4}
+                     "spectral": 2e-5, "bff": 3e-6, "abf": 3e-5, "arap": 5e-5, "slim": 5e-5,
+                     "mips": 5e-5, "scaffold": 2e-4}
 # Above this estimate the operator solves on a worker thread and shows progress.
 MODAL_AFTER_SECONDS = 0.5
 # Seconds Blender's packer may take on a few islands of the exact or convex shape (searched

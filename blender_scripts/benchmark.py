@@ -67,11 +67,11 @@ BLENDER_METHODS = ("ANGLE_BASED", "CONFORMAL", "MINIMUM_STRETCH")
 # Blender's linear LSCM; ABF with ABF++; the isometric/nonlinear ones with SLIM).
 FAMILY = {
     "tutte": "CONFORMAL", "harmonic": "CONFORMAL", "mean_value": "CONFORMAL",
-    "lscm": "CONFORMAL", "spectral": "CONFORMAL", "mips": "CONFORMAL",
+    "lscm": "CONFORMAL", "spectral": "CONFORMAL", "bff": "CONFORMAL", "mips": "CONFORMAL",
     "abf": "ANGLE_BASED",
     "arap": "MINIMUM_STRETCH", "slim": "MINIMUM_STRETCH", "scaffold": "MINIMUM_STRETCH",
 }
-LINEAR = {"tutte", "harmonic", "mean_value", "lscm"}
+LINEAR = {"tutte", "harmonic", "mean_value", "lscm", "bff"}
 MARGIN = 0.001
 
 

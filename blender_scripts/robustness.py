@@ -45,7 +45,7 @@ sys.path.insert(0, str(REPO / "tests"))
 
 from meshio_util import MESH_DIR, read_obj, read_off  # noqa: E402
 
-METHODS = ("abf", "slim", "lscm", "mips", "scaffold", "arap", "spectral")
+METHODS = ("abf", "slim", "lscm", "mips", "scaffold", "arap", "spectral", "bff")
 MESHES = ("bunny.off", "cow.off", "decimated-max.obj", "fertility.off", "3holes.off",
           "camelhead.off", "lion.off", "beetle.off", "halftunnel.off", "alligator.obj")
 VARIANTS = ("as_is", "holes", "big_holes", "quads", "ngons", "collapsed", "parts")

@@ -143,7 +143,7 @@ def parse_args(argv):
                              f"patterns, then the output file ({', '.join(OUTPUT_SUFFIXES)}) or, "
                              "for several inputs, the output folder")
     parser.add_argument("--method", default="abf",
-                        help="uvflat method (tutte, harmonic, mean_value, lscm, spectral, ...)")
+                        help="uvflat method (tutte, harmonic, mean_value, lscm, spectral, bff, ...)")
     parser.add_argument("--boundary", choices=("circle", "square", "virtual", "free", "convex"),
                         default=None,
                         help="tutte/harmonic/mean_value: circle, square or virtual (default "

@@ -499,7 +499,7 @@ def read_shape_ngon():
     return positions, np.concatenate(faces), np.array([len(f) for f in faces])
 
 
-@pytest.mark.parametrize("method", ["tutte", "lscm", "harmonic", "spectral"])
+@pytest.mark.parametrize("method", ["tutte", "lscm", "harmonic", "spectral", "bff"])
 def test_ngons(ext, scene, method):
     io = ext.mesh_io
     obj = common.link_mesh_object("Ngons", io.new_mesh("Ngons", *read_shape_ngon()))

@@ -635,8 +635,8 @@ def test_default_is_abf_and_presets_set_the_method(ext, scene):
     for props in (op_props, defaults.bl_rna.properties):
         assert props["method"].default == "abf"
         assert props["preset"].default == "BALANCED"
-        # the ten methods stay, under Advanced
-        assert len(props["method"].enum_items) == 10
+        # the eleven methods stay, under Advanced
+        assert len(props["method"].enum_items) == 11
         presets = {item.identifier: item for item in props["preset"].enum_items}
         assert list(presets) == ["FAST", "BALANCED", "LEAST_STRETCH", "ADVANCED"]
         descriptions = [item.description for item in presets.values()]
@@ -646,14 +646,14 @@ def test_default_is_abf_and_presets_set_the_method(ext, scene):
     assert result == {"FINISHED"} and summary.method == "abf"
     saved = (defaults.preset, defaults.method)
     try:
-        for preset, method in (("FAST", "lscm"), ("LEAST_STRETCH", "slim"), ("BALANCED", "abf")):
+        for preset, method in (("FAST", "bff"), ("LEAST_STRETCH", "slim"), ("BALANCED", "abf")):
             defaults.preset = preset
             assert defaults.method == method
         defaults.preset = "FAST"
         defaults.method = "mips"  # a method of its own: Advanced
         assert defaults.preset == "ADVANCED" and defaults.method == "mips"
         # the operator: a preset runs its method, a named method runs as named
-        for preset, method in (("FAST", "lscm"), ("LEAST_STRETCH", "slim")):
+        for preset, method in (("FAST", "bff"), ("LEAST_STRETCH", "slim")):
             result, summary = unwrap(ext, [obj], preset=preset)
             assert result == {"FINISHED"} and summary.method == method
         result, summary = unwrap(ext, [obj], method="tutte")
@@ -669,8 +669,8 @@ def test_default_is_abf_and_presets_set_the_method(ext, scene):
             assert op.invoke(bpy.context, None) == {"FINISHED"}
         finally:
             common.object_mode()
-        assert (op.preset, op.method) == ("FAST", "lscm")
-        assert ext.engine.LAST_SUMMARY.method == "lscm"
+        assert (op.preset, op.method) == ("FAST", "bff")
+        assert ext.engine.LAST_SUMMARY.method == "bff"
     finally:
         defaults.preset, defaults.method = saved
 

@@ -484,7 +484,7 @@ def test_lscm_without_pins_is_the_spectral_map_and_with_pins_holds_them():
     assert similarity_gap(pinned.uv, spectral.uv) > 1e-4
 
 
-@pytest.mark.parametrize("method", ["tutte", "harmonic", "mean_value", "lscm", "spectral"])
+@pytest.mark.parametrize("method", ["tutte", "harmonic", "mean_value", "lscm", "spectral", "bff"])
 def test_every_method_maps_a_disk_without_flips(method):
     pos, cv, fs = grid(5, 5, triangles=True)
     r = uvflat.unwrap(pos, cv, fs, method=method)
@@ -890,7 +890,7 @@ def test_real_bad_input_never_crashes(name):
 
 def test_factorization_seconds_is_defined_for_the_linear_methods_only():
     positions, corner_verts, face_sizes = grid(12, 9)
-    for method in ("tutte", "harmonic", "mean_value", "lscm"):
+    for method in ("tutte", "harmonic", "mean_value", "lscm", "bff"):
         t = uvflat.factorization_seconds(positions, corner_verts, face_sizes, method=method)
         assert isinstance(t, float) and t > 0.0, method
     assert uvflat.factorization_seconds(positions, corner_verts, face_sizes, method="spectral") is None

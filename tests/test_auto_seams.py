@@ -354,3 +354,15 @@ def test_same_seams_gives_the_area_balancing_methods_one_plan_and_off_their_own(
     r = uvflat.unwrap(pos, cv, fs, method="slim", same_seams=False)
     assert np.array_equal(r.new_seams, own)
     assert_atlas_rule(pos, cv, fs, r)
+
+
+def test_bff_keeps_the_rule_on_the_plan_where_lscm_needs_more_islands():
+    """``bff`` is the map the cuts are planned on (u = 0 on the outline), so the planned seams
+    hold for it where ``lscm``'s free outline breaks the rule and is cut again."""
+    pos, cv, fs = five_armed_sphere()
+    r = uvflat.unwrap(pos, cv, fs, method="bff")
+    assert_atlas_rule(pos, cv, fs, r)
+    assert np.array_equal(r.new_seams, uvflat.plan_seams(pos, cv, fs, method="bff"))
+    lscm = uvflat.unwrap(pos, cv, fs, method="lscm")
+    abf = uvflat.unwrap(pos, cv, fs, method="abf")
+    assert len(r.charts) <= len(abf.charts) < len(lscm.charts), (len(r.charts), len(abf.charts), len(lscm.charts))

@@ -11,7 +11,7 @@ use crate::unwrap::MeshInput;
 
 /// Seconds spent by one symbolic analysis plus numeric factorization of the system each
 /// linear method solves, summed over the mappable charts of the selection: the Laplacian with
-/// the outer boundary fixed (Cholesky for tutte/harmonic, LU for mean value), or the complex
+/// the outer boundary fixed (Cholesky for tutte/harmonic/bff, LU for mean value), or the complex
 /// LSCM matrix with two pins (Cholesky). Assembly is not included.
 ///
 /// Returns `None` for methods that are not a single linear solve. Errors: the input validation
@@ -20,7 +20,7 @@ pub fn factorization_seconds(input: &MeshInput<'_>, method: &Method) -> Result<O
     let mesh = crate::validate::validate_input(input, None, Some(method))?;
     let weights = match method {
         Method::Tutte { .. } => Some(Weights::Uniform),
-        Method::Harmonic { .. } => Some(Weights::Cotangent),
+        Method::Harmonic { .. } | Method::Bff => Some(Weights::Cotangent),
         Method::MeanValue { .. } => Some(Weights::MeanValue),
         Method::Lscm => None,
         _ => return Ok(None),

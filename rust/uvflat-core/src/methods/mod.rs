@@ -5,6 +5,7 @@
 
 pub mod abf;
 pub mod arap;
+pub mod bff;
 pub mod boundary_eigen;
 pub mod fixed_boundary;
 pub mod harmonic;
@@ -69,6 +70,9 @@ pub enum Method {
     Lscm,
     /// Mullen et al. 2008: spectral conformal, free boundary, no pins.
     Spectral(SpectralOptions),
+    /// Sawhney & Crane 2017: boundary first flattening with the outline's lengths kept, the
+    /// conformal map of least area distortion (the one automatic seams plan on); no pins.
+    Bff,
     /// Sheffer & de Sturler 2001 / Sheffer et al. 2005: angle based flattening (ABF++ by
     /// default), UVs by LSCM from the solved angles; falls back to LSCM when it fails.
     /// Default: the best atlas on closed, open and seamed meshes.
@@ -104,7 +108,7 @@ pub enum OptionValue {
 
 /// Names accepted by [`Method::parse`].
 pub fn method_names() -> &'static [&'static str] {
-    &["tutte", "harmonic", "mean_value", "lscm", "spectral", "abf", "arap", "slim", "mips", "scaffold"]
+    &["tutte", "harmonic", "mean_value", "lscm", "spectral", "bff", "abf", "arap", "slim", "mips", "scaffold"]
 }
 
 fn opt_err(name: impl Into<String>, reason: impl Into<String>) -> UvError {
@@ -228,6 +232,7 @@ impl Method {
             "mean_value" => Method::MeanValue { boundary },
             "lscm" => Method::Lscm,
             "spectral" => Method::Spectral(spectral),
+            "bff" => Method::Bff,
             "abf" => Method::Abf(abf_opts),
             "arap" => Method::Arap(arap_opts),
             "slim" => Method::Slim(slim_opts),
@@ -249,6 +254,7 @@ impl Method {
             Method::MeanValue { .. } => "mean_value",
             Method::Lscm => "lscm",
             Method::Spectral(_) => "spectral",
+            Method::Bff => "bff",
             Method::Abf(_) => "abf",
             Method::Arap(_) => "arap",
             Method::Slim(_) => "slim",
@@ -490,7 +496,7 @@ impl Method {
             Method::Tutte { boundary } | Method::MeanValue { boundary } => *boundary != BoundaryShape::Square,
             Method::Abf(_) => kind == ChartKind::Disk,
             Method::Slim(_) | Method::Mips(_) | Method::Scaffold(_) => true,
-            Method::Harmonic { .. } | Method::Lscm | Method::Spectral(_) | Method::Arap(_) => false,
+            Method::Harmonic { .. } | Method::Lscm | Method::Spectral(_) | Method::Bff | Method::Arap(_) => false,
         }
     }
 
@@ -541,6 +547,7 @@ fn dispatch(method: &Method, chart: &Chart, pins: &[(u32, [f64; 2])]) -> std::re
         Method::Spectral(o) => {
             spectral::solve(chart, pins, o).map(|sol| convex_quads(chart, pins, sol, "the spectral map"))
         }
+        Method::Bff => bff::solve(chart, pins).map(|sol| convex_quads(chart, pins, sol, "the bff map")),
         Method::Abf(o) => abf::solve(chart, pins, o).and_then(|sol| {
             // A convex outline stays put: its vertices do not move (holes' may).
             let mut fixed = Vec::new();

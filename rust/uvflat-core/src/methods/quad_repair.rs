@@ -1,5 +1,6 @@
 //! Make the non-convex quads of an otherwise flip-free map strictly convex by moving as few
-//! vertices as little as possible, without flipping anything on the way.
+//! vertices as little as possible, without flipping anything on the way; the same step
+//! unfolds the few flipped triangles of an otherwise valid map ([`unfold`]).
 //!
 //! Used after methods whose flip-free promise covers triangles but not the other diagonal of
 //! quads (ABF: its angles are per triangle, so a quad's corner may reach π). A quad is
@@ -68,11 +69,66 @@ pub fn repair_quads(chart: &Chart, uv: &mut [[f64; 2]], fixed: &[bool]) -> (usiz
     if bad.is_empty() {
         return (0, 0);
     }
+    let moved = raise_areas(&bad, &barrier, uv, fixed);
+    (super::nonconvex_quads(chart, uv), moved)
+}
+
+/// Unfold the few flipped triangles of an otherwise valid map: every triangle of `triangles`
+/// that is not positive under `uv` is a bad triangle (its target doubled area 10⁻³ × the
+/// product of its two longest 3D edges from `positions`, for a map at about the 3D scale; so
+/// a triangle whose corner lies on another in 3D gets room too),
+/// every positive one the barrier, and the penalty is lowered as in [`repair_quads`].
+/// Vertices with `fixed[v]` do not move (`fixed` may be empty). Returns the triangles still
+/// flipped ([`crate::metrics::count_flips`]) and the vertices moved.
+///
+/// Used by maps with no barrier of their own whose folds are few and local (the harmonic
+/// extension of `bff`). Failure mode: none; a fold whose fix would flip a neighbour stays.
+pub fn unfold(positions: &[[f64; 3]], triangles: &[[u32; 3]], uv: &mut [[f64; 2]], fixed: &[bool]) -> (usize, usize) {
+    use crate::geometry::{norm, sub};
+    let length = |a: u32, b: u32| norm(sub(positions[b as usize], positions[a as usize]));
+    let positive = |t: &[u32; 3]| doubled_area(t, uv) > 0.0;
+    let bad: Vec<([u32; 3], f64)> = triangles
+        .iter()
+        .filter(|t| !positive(t))
+        .map(|t| {
+            let mut l = [length(t[0], t[1]), length(t[1], t[2]), length(t[2], t[0])];
+            l.sort_by(f64::total_cmp);
+            (*t, 1e-3 * l[1] * l[2])
+        })
+        .collect();
+    if bad.is_empty() {
+        return (crate::metrics::count_flips(triangles, uv), 0);
+    }
+    // Only the bad triangles' vertices move, so only the positive triangles around them can
+    // turn over: they are the barrier.
+    let mut moving = vec![false; uv.len()];
+    for (t, _) in &bad {
+        for &v in t {
+            moving[v as usize] = true;
+        }
+    }
+    let barrier: Vec<[u32; 3]> = triangles
+        .iter()
+        .filter(|t| doubled_area(t, uv) > 0.0 && t.iter().any(|&v| moving[v as usize]))
+        .copied()
+        .collect();
+    let moved = raise_areas(&bad, &barrier, uv, fixed);
+    (crate::metrics::count_flips(triangles, uv), moved)
+}
+
+/// Gauss–Newton on the penalty of the module docs: the `bad` triangles' doubled areas raised
+/// towards their targets, no `barrier` triangle ever turned over, `fixed` vertices kept.
+/// Returns the number of vertices moved.
+fn raise_areas(bad: &[([u32; 3], f64)], barrier: &[[u32; 3]], uv: &mut [[f64; 2]], fixed: &[bool]) -> usize {
     let is_fixed = |v: u32| fixed.get(v as usize).copied().unwrap_or(false);
     let penalty = |x: &[[f64; 2]]| -> f64 {
         bad.iter().map(|(t, tau)| (tau - doubled_area(t, x)).max(0.0).powi(2)).sum()
     };
     let start = uv.to_vec();
+    // Only the bad triangles' vertices have a direction: a step moves those alone.
+    let mut moving: Vec<usize> = bad.iter().flat_map(|(t, _)| t.iter().map(|&v| v as usize)).collect();
+    moving.sort_unstable();
+    moving.dedup();
     let mut p = penalty(uv);
     let mut dir = vec![[0.0f64; 2]; uv.len()];
     let mut trial = uv.to_vec();
@@ -81,12 +137,12 @@ pub fn repair_quads(chart: &Chart, uv: &mut [[f64; 2]], fixed: &[bool]) -> (usiz
             break;
         }
         // Steepest descent of P: Σ r_t ∇(2A_t) over the active bad triangles.
-        for &(t, _) in &bad {
+        for &(t, _) in bad {
             for &v in &t {
                 dir[v as usize] = [0.0, 0.0];
             }
         }
-        for (t, tau) in &bad {
+        for (t, tau) in bad {
             let r = (tau - doubled_area(t, uv)).max(0.0);
             if r == 0.0 {
                 continue;
@@ -102,7 +158,7 @@ pub fn repair_quads(chart: &Chart, uv: &mut [[f64; 2]], fixed: &[bool]) -> (usiz
         }
         // Step minimising the linearised penalty: Σ r s / Σ s², s = ∇(2A)·d.
         let (mut num, mut den) = (0.0, 0.0);
-        for (t, tau) in &bad {
+        for (t, tau) in bad {
             let r = (tau - doubled_area(t, uv)).max(0.0);
             let g = area_gradient(t, uv);
             let s: f64 = (0..3).map(|k| g[k][0] * dir[t[k] as usize][0] + g[k][1] * dir[t[k] as usize][1]).sum();
@@ -114,18 +170,21 @@ pub fn repair_quads(chart: &Chart, uv: &mut [[f64; 2]], fixed: &[bool]) -> (usiz
         if !(den > 0.0) || !(num > 0.0) {
             break;
         }
-        let mut step = (num / den).min(0.8 * max_flip_free_step(&barrier, uv, &dir));
+        let mut step = (num / den).min(0.8 * max_flip_free_step(barrier, uv, &dir));
         let mut accepted = false;
         for _ in 0..40 {
             if !(step > 0.0) || !step.is_finite() {
                 break;
             }
-            for (q, (x, d)) in trial.iter_mut().zip(uv.iter().zip(&dir)) {
-                *q = [x[0] + step * d[0], x[1] + step * d[1]];
+            for &v in &moving {
+                let (x, d) = (uv[v], dir[v]);
+                trial[v] = [x[0] + step * d[0], x[1] + step * d[1]];
             }
             let pt = penalty(&trial);
-            if pt < p && all_positive(&barrier, &trial) {
-                uv.copy_from_slice(&trial);
+            if pt < p && all_positive(barrier, &trial) {
+                for &v in &moving {
+                    uv[v] = trial[v];
+                }
                 p = pt;
                 accepted = true;
                 break;
@@ -136,12 +195,11 @@ pub fn repair_quads(chart: &Chart, uv: &mut [[f64; 2]], fixed: &[bool]) -> (usiz
             break;
         }
         // The directions of vertices outside the bad triangles stay zero.
-        for &(t, _) in &bad {
+        for &(t, _) in bad {
             for &v in &t {
                 dir[v as usize] = [0.0, 0.0];
             }
         }
     }
-    let moved = uv.iter().zip(&start).filter(|(a, b)| a != b).count();
-    (super::nonconvex_quads(chart, uv), moved)
+    uv.iter().zip(&start).filter(|(a, b)| a != b).count()
 }

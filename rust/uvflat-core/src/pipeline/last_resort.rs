@@ -41,11 +41,11 @@ use super::{Context, Piece};
 use crate::charts::{Chart, ChartKind};
 use crate::methods::{scaffold::ScaffoldOptions, Method};
 
-/// The method's flip-free kin (module docs): MIPS for LSCM, spectral and ABF, SLIM for ARAP;
+/// The method's flip-free kin (module docs): MIPS for LSCM, spectral, bff and ABF, SLIM for ARAP;
 /// `None` for the methods that promise no flips already.
 pub fn kin(method: &Method) -> Option<Method> {
     match method {
-        Method::Lscm | Method::Spectral(_) | Method::Abf(_) => Some(Method::Mips(Default::default())),
+        Method::Lscm | Method::Spectral(_) | Method::Bff | Method::Abf(_) => Some(Method::Mips(Default::default())),
         Method::Arap(_) => Some(Method::Slim(Default::default())),
         _ => None,
     }

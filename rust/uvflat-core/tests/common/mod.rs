@@ -217,6 +217,7 @@ pub fn every_method(iterations: usize, spectral_iterations: usize) -> Vec<uvflat
     v.extend([
         Method::Lscm,
         Method::Spectral(SpectralOptions { max_iterations: spectral_iterations, ..Default::default() }),
+        Method::Bff,
         Method::Abf(abf::AbfOptions::default()),
         Method::Abf(abf::AbfOptions { solver: abf::AbfSolver::Plain, ..Default::default() }),
         Method::Abf(abf::AbfOptions { boundary: abf::AbfBoundary::Convex, ..Default::default() }),

@@ -99,7 +99,7 @@ def unwrap(positions, corner_verts, face_sizes, *, method="abf", seams=None, sel
         corner_verts: (C,) vertex index of every corner, faces one after another.
         face_sizes: (F,) corners per face (each >= 3), summing to C.
         method: one of :data:`METHODS`: "tutte", "harmonic", "mean_value", "lscm",
-            "spectral", "abf" (default), "arap", "slim", "mips", "scaffold".
+            "spectral", "bff", "abf" (default), "arap", "slim", "mips", "scaffold".
         seams: (E, 2) seam edges as vertex pairs (either order).
         selected: (F,) faces to unwrap; default all. Unselected faces get chart -1.
         pins: (P,) corner indices whose UVs are fixed.
@@ -148,7 +148,7 @@ def unwrap(positions, corner_verts, face_sizes, *, method="abf", seams=None, sel
 
             * tutte, harmonic, mean_value: ``boundary`` "circle" (default), "square" or
               "virtual".
-            * lscm: none.
+            * lscm, bff: none.
             * spectral: ``max_iterations`` (int >= 1, default 200), ``tolerance`` (float,
               default 1e-10).
             * abf: ``solver`` "abf++" (default) or "abf"; ``boundary`` "free" (default) or

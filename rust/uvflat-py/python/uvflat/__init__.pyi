@@ -45,8 +45,8 @@ them (``auto_seams``, ``max_stretch``, ``max_cones``, ``avoid_vertices``, ``shar
 Symmetry = Literal["none", "x", "y", "z", "auto"]
 """Mirror planes automatic seams can keep (``unwrap(symmetry=...)``)."""
 
-Method = Literal["tutte", "harmonic", "mean_value", "lscm", "spectral", "abf", "arap", "slim",
-                 "mips", "scaffold"]
+Method = Literal["tutte", "harmonic", "mean_value", "lscm", "spectral", "bff", "abf", "arap",
+                 "slim", "mips", "scaffold"]
 """Every method of :data:`METHODS`."""
 
 class UnwrapOptions(TypedDict, total=False):
@@ -353,7 +353,7 @@ def unwrap(
             Quads count as folded (``flips``) when either diagonal split has a flipped
             triangle, with or without this argument.
         **options: the method's own options, see :class:`UnwrapOptions`: tutte, harmonic,
-            mean_value: ``boundary``; lscm: none; spectral, arap, mips, scaffold:
+            mean_value: ``boundary``; lscm, bff: none; spectral, arap, mips, scaffold:
             ``max_iterations``, ``tolerance``; slim: those and ``start``; abf: ``solver``,
             ``boundary``, ``max_iterations``, ``tolerance`` and ``angle_sums=(vertices, sums)``
             ((K,) mesh vertex indices and (K,) angle sums in radians that the flattened map
@@ -417,7 +417,7 @@ def factorization_seconds(
     each chart's unwrap solves with ``method``, summed over the charts that can be mapped.
 
     ``None`` for methods that are not a single linear solve (only ``tutte``, ``harmonic``,
-    ``mean_value`` and ``lscm`` are). Assembly is not included: an unwrap that costs about
+    ``mean_value``, ``lscm`` and ``bff`` are). Assembly is not included: an unwrap that costs about
     this much is dominated by the factorization.
     """
 
