@@ -23,7 +23,8 @@ Both flags together measure all of them. ``--meshes`` takes any of these names (
 a .off/.obj/.ply file) whichever flag is given. Every unwrap starts from the same mesh without
 seams and with all UVs at the origin, in one process:
 
-* ``uvflat abf`` / ``uvflat slim``: the operator with Auto Seams (its default), packing on;
+* ``uvflat abf`` / ``uvflat slim`` / ``uvflat bff``: the operator with Auto Seams (its
+  default), packing on;
 * ``smart+ABF``: Blender's Smart UV Project (66°), seams from its islands, then Blender's
   ANGLE_BASED unwrap on those seams (time of both operators);
 * ``xatlas``: an xatlas atlas (``pip install xatlas``; the row is left out without it).
@@ -428,7 +429,8 @@ def _run_smart(obj):
 
 
 ROWS = (("uvflat_abf", "uvflat abf (auto seams)"), ("uvflat_slim", "uvflat slim (auto seams)"),
-        ("smart_abf", "Smart UV 66° + ANGLE_BASED"), ("xatlas", "xatlas"))
+        ("uvflat_bff", "uvflat bff (auto seams)"), ("smart_abf", "Smart UV 66° + ANGLE_BASED"),
+        ("xatlas", "xatlas"))
 
 
 def rows_for(uvflat, mesh_io, obj, repeat):
@@ -440,6 +442,7 @@ def rows_for(uvflat, mesh_io, obj, repeat):
     rows = []
     for key, run in (("uvflat_abf", lambda: _run_uvflat(obj, "abf")),
                      ("uvflat_slim", lambda: _run_uvflat(obj, "slim")),
+                     ("uvflat_bff", lambda: _run_uvflat(obj, "bff")),
                      ("smart_abf", lambda: _run_smart(obj))):
         times = []
         for _ in range(repeat):
@@ -564,7 +567,7 @@ def run(meshes, repeat, dump_uv=None, phases=False):
                 target_lines.append(f"- {name} · {r['label']}: {verdict}: {text}")
                 print(target_lines[-1], flush=True)
         if phases:
-            for method in ("abf", "slim"):
+            for method in ("abf", "slim", "bff"):
                 phase_lines.append(phase_line(uvflat, name, method, positions.astype(np.float64),
                                               corner_verts, face_sizes, xatlas_row))
                 print(phase_lines[-1], flush=True)

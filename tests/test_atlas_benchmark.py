@@ -23,7 +23,7 @@ sys.path.insert(0, str(REPO / "blender_scripts"))
 
 COLUMNS = ("mesh", "unwrap", "islands", "seam length / √area", "flips", "overlapping",
            "conformal", "area", "outside [½, 2]", "density p5–p95", "s")
-UVFLAT_ROWS = ("uvflat abf (auto seams)", "uvflat slim (auto seams)")
+UVFLAT_ROWS = ("uvflat abf (auto seams)", "uvflat slim (auto seams)", "uvflat bff (auto seams)")
 
 
 def _cup(rings=6, segments=12, depth=1.6):
@@ -99,7 +99,7 @@ def _metrics(bench, key):
 def test_table_has_the_new_columns(bench):
     assert tuple(bench.head) == COLUMNS, bench.head
     labels = [r["unwrap"] for r in bench.rows]
-    assert labels[:3] == [*UVFLAT_ROWS, "Smart UV 66° + ANGLE_BASED"], labels
+    assert labels[:4] == [*UVFLAT_ROWS, "Smart UV 66° + ANGLE_BASED"], labels
     for r in bench.rows:
         assert r["mesh"] == "cup 132", r
         share = _percent(r["outside [½, 2]"])
@@ -111,6 +111,7 @@ def test_table_has_the_new_columns(bench):
 
 @pytest.mark.parametrize("label,key", [(UVFLAT_ROWS[0], "uvflat_abf"),
                                        (UVFLAT_ROWS[1], "uvflat_slim"),
+                                       (UVFLAT_ROWS[2], "uvflat_bff"),
                                        ("Smart UV 66° + ANGLE_BASED", "smart_abf")])
 def test_density_share_is_the_one_metrics_gives(bench, label, key):
     """The printed share is ``uvflat.metrics(...).density_outside`` of the map the row made,

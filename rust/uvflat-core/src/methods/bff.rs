@@ -3,8 +3,9 @@
 //!
 //! Paper: R. Sawhney, K. Crane, "Boundary First Flattening", ACM Transactions on Graphics
 //! 37(1), 2017 (§4–5), on the discrete Yamabe equation of Springborn, Schröder, Pinkall 2008.
-//! A conformal map scales lengths by `e^u`; with `u = 0` on the boundary it is the conformal
-//! map whose log scale is smallest in the mean (the harmonic part of `u` vanishes), and its
+//! A conformal map scales lengths by `e^u`; `u = 0` on the boundary is the paper's choice for
+//! least area distortion (any other conformal flattening adds a harmonic function to `u`, and
+//! this `u` varies least: its Dirichlet energy is the smallest), and its
 //! scale factor is exactly the one automatic seams plan their cuts on
 //! ([`crate::cuts::cones`]), so a chart cut by that plan comes out with the stretch the plan
 //! predicted. Steps, on one sparse Cholesky factorization of the cotangent Laplacian `L`
