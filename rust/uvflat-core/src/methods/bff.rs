@@ -43,7 +43,7 @@
 
 use std::f64::consts::PI;
 
-use super::fixed_boundary::{filled_chart, laplacian_triplets, Weights};
+use super::fixed_boundary::{cotangent_triplets, filled_chart, laplacian_triplets, Weights};
 use super::{chart_angles, lscm, ChartFailure, ChartSolution, Fallback};
 use crate::charts::{Chart, ChartKind};
 use crate::solvers::ordering::OrderingKind;
@@ -55,12 +55,8 @@ pub const MIN_CLOSED_LENGTH: f64 = 0.05;
 
 /// Map one chart (see the module docs).
 pub fn solve(chart: &Chart, pins: &[(u32, [f64; 2])]) -> Result<ChartSolution, ChartFailure> {
-    if lscm::pins_span(pins) {
-        let angles = chart_angles(&chart.positions, &chart.triangles);
-        let (uv, _) = lscm::solve_with_angles(chart, &angles, pins)?;
-        let mut s = ChartSolution::direct(uv);
-        s.note = Some("pinned chart: solved as LSCM with the pins (bff takes no pins)".into());
-        return Ok(s);
+    if let Some(pinned) = lscm::instead_for_pins(chart, pins, "bff") {
+        return pinned;
     }
     let filled;
     let disk = if chart.kind == ChartKind::DiskWithHoles {
@@ -81,9 +77,8 @@ pub fn solve(chart: &Chart, pins: &[(u32, [f64; 2])]) -> Result<ChartSolution, C
             s
         }
     };
-    if !pins.is_empty() {
-        super::nonlinear::pins::translate_onto_first_pin(&mut s.uv, pins);
-        s.note = Some("one pinned vertex: the chart was translated onto it".into());
+    if let Some(note) = super::nonlinear::pins::translate_onto_single_pin(&mut s.uv, pins, "bff") {
+        s.note = Some(note);
     }
     Ok(s)
 }
@@ -103,7 +98,7 @@ fn flatten(disk: &Chart) -> Result<Vec<[f64; 2]>, ChartFailure> {
             angle_sum[t[k] as usize] += a[k];
         }
     }
-    let triplets = laplacian_triplets(&disk.positions, &disk.triangles, Weights::Cotangent);
+    let triplets = cotangent_triplets(&disk.triangles, &angles);
     let solver = FixedValueSolver::with_ordering(n, &triplets, outline, Symmetry::Symmetric, OrderingKind::Amd)?;
     // 1. The log scale factor, zero on the outline.
     let minus_k: Vec<f64> = angle_sum.iter().map(|s| s - 2.0 * PI).collect();

@@ -366,6 +366,21 @@ fn mean_edge(positions: &[[f64; 3]], triangles: &[[u32; 3]]) -> f64 {
     if n > 0 && s > 0.0 { s / n as f64 } else { 1.0 }
 }
 
+/// Lower-triangle triplets of the cotangent Laplacian from the triangles' corner angles
+/// (weights ½(cot α + cot β); [`laplacian_triplets`] with [`Weights::Cotangent`] computes the
+/// angles itself).
+pub fn cotangent_triplets(triangles: &[[u32; 3]], angles: &[[f64; 3]]) -> Vec<(u32, u32, f64)> {
+    let mut out = Vec::with_capacity(triangles.len() * 9);
+    for (t, a) in triangles.iter().zip(angles) {
+        for k in 0..3 {
+            let (i, j) = (t[(k + 1) % 3], t[(k + 2) % 3]);
+            let w = 0.5 / a[k].tan();
+            out.extend([(i, i, w), (j, j, w), (i.max(j), i.min(j), -w)]);
+        }
+    }
+    out
+}
+
 fn laplacian_triplets_triangles(positions: &[[f64; 3]], triangles: &[[u32; 3]], weights: Weights) -> Vec<(u32, u32, f64)> {
     let mut out = Vec::with_capacity(triangles.len() * 12);
     let push_sym = |i: u32, j: u32, w: f64, out: &mut Vec<(u32, u32, f64)>| {
@@ -383,15 +398,7 @@ fn laplacian_triplets_triangles(positions: &[[f64; 3]], triangles: &[[u32; 3]], 
                 push_sym(i, j, 1.0, &mut out);
             }
         }
-        Weights::Cotangent => {
-            let angles = chart_angles(positions, triangles);
-            for (t, a) in triangles.iter().zip(&angles) {
-                for k in 0..3 {
-                    let (i, j) = (t[(k + 1) % 3], t[(k + 2) % 3]);
-                    push_sym(i, j, 0.5 / a[k].tan(), &mut out);
-                }
-            }
-        }
+        Weights::Cotangent => return cotangent_triplets(triangles, &chart_angles(positions, triangles)),
         Weights::MeanValue => {
             let angles = chart_angles(positions, triangles);
             let mean_len = mean_edge(positions, triangles);

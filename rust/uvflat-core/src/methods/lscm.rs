@@ -170,6 +170,26 @@ pub(crate) fn pins_span(pins: &[(u32, [f64; 2])]) -> bool {
     pins.len() >= 2 && pins.iter().any(|p| p.1 != pins[0].1)
 }
 
+/// The chart of a method that takes no pins (`method`: spectral, bff) when its pins span more
+/// than a point: LSCM with those pins held, the note saying so; `None` otherwise (the method
+/// solves it and translates onto a single pin,
+/// [`super::nonlinear::pins::translate_onto_single_pin`]).
+pub(crate) fn instead_for_pins(
+    chart: &Chart,
+    pins: &[(u32, [f64; 2])],
+    method: &str,
+) -> Option<Result<ChartSolution, ChartFailure>> {
+    if !pins_span(pins) {
+        return None;
+    }
+    let angles = chart_angles(&chart.positions, &chart.triangles);
+    Some(solve_with_angles(chart, &angles, pins).map(|(uv, _)| {
+        let mut s = ChartSolution::direct(uv);
+        s.note = Some(format!("pinned chart: solved as LSCM with the pins ({method} takes no pins)"));
+        s
+    }))
+}
+
 /// LSCM of a chart driven by given corner angles (solved angles for ABF). Pins as described in
 /// the module docs, two automatic ones when none span; the returned note says how they were
 /// used. For angles nearly consistent with a planar map (ABF's) the two pins cost nothing;

@@ -25,21 +25,14 @@ use crate::charts::Chart;
 
 /// Map one chart.
 pub fn solve(chart: &Chart, pins: &[(u32, [f64; 2])], options: &SpectralOptions) -> Result<ChartSolution, ChartFailure> {
-    let angles = chart_angles(&chart.positions, &chart.triangles);
-    if lscm::pins_span(pins) {
-        let (uv, _) = lscm::solve_with_angles(chart, &angles, pins)?;
-        let mut s = ChartSolution::direct(uv);
-        s.note = Some("pinned chart: solved as LSCM with the pins (spectral takes no pins)".into());
-        return Ok(s);
+    if let Some(pinned) = lscm::instead_for_pins(chart, pins, "spectral") {
+        return pinned;
     }
+    let angles = chart_angles(&chart.positions, &chart.triangles);
     let mut it = BoundaryIteration::new(chart, lscm::conformal_hermitian(&chart.triangles, &angles))?;
     let (iterations, change) = it.lanczos(options.max_iterations, options.tolerance)?;
     let mut uv = it.uv();
-    let mut note = None;
-    if pins.first().is_some() {
-        super::nonlinear::pins::translate_onto_first_pin(&mut uv, pins);
-        note = Some("one pinned vertex: the chart was translated onto it".into());
-    }
+    let note = super::nonlinear::pins::translate_onto_single_pin(&mut uv, pins, "spectral");
     let mut s = ChartSolution::direct(uv);
     s.iterations = iterations;
     s.residual = change;
